@@ -1,0 +1,184 @@
+"""Planar conventions of ccopt: the one place where frames, signs and polygons are defined.
+
+World plane
+    ``x`` horizontal (the paper's I), ``y`` vertical up (the paper's J), gravity along ``-y``.
+    Angles are counter-clockwise positive, in radians. Units are SI throughout.
+
+Hand pose ``x_h = (x_h, y_h, θ_h)``
+    The centre of the hand's contact face and its orientation. At ``θ_h = 0`` the hand lies
+    horizontally *above* the object and pushes down.
+
+Hand contact frame
+    ``e_n`` is the unit normal from the hand into the object, ``e_t`` is ``e_n`` rotated by +90°::
+
+        e_t(θ) = ( cos θ, sin θ)        e_n(θ) = ( sin θ, -cos θ)
+
+    Hand-frame vectors are ordered ``(n, t, θ)``: a hand wrench is ``w_h = (f_n, f_t, τ)`` — the
+    wrench the hand exerts on the object, ``f_n > 0`` when pushing, ``τ`` about the centre of the
+    hand face (CCW positive) — and a hand-frame pose increment is ``(Δn, Δt, Δθ)``.
+
+Kinematics (paper eqs. 19–21)
+    ``r_h = r_o − s_h e_t − d e_n`` while the hand is flush (``θ_o = θ_h``), with ``r_o = (x_o, y_o)``
+    the ground contact, ``s_g = x_o``, ``s_h = (r_o − r_h)·e_t`` and ``d = (r_o − r_h)·e_n``.
+
+In MuJoCo the plane is x–z: ``(x, y)_ccopt = (x, z)_mujoco``; hinge joints use axis ``(0, -1, 0)``
+so that ``qpos`` equals the CCW planar angle.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+GRAVITY = 9.81
+"""Magnitude of gravity, m/s², acting along ``-y``."""
+
+Array = NDArray[np.float64]
+
+
+def rotation(theta: float) -> Array:
+    """2×2 rotation matrix of a CCW angle ``theta`` (rad)."""
+    c, s = np.cos(theta), np.sin(theta)
+    return np.array([[c, -s], [s, c]])
+
+
+def wrap_angle(theta: ArrayLike) -> Array | float:
+    """Angle(s) wrapped to ``[-π, π)``."""
+    wrapped = (np.asarray(theta, dtype=float) + np.pi) % (2.0 * np.pi) - np.pi
+    return float(wrapped) if np.ndim(wrapped) == 0 else wrapped
+
+
+def hand_normal(theta_h: float) -> Array:
+    """``e_n``: unit normal from the hand into the object, world frame, for hand angle ``θ_h``."""
+    return np.array([np.sin(theta_h), -np.cos(theta_h)])
+
+
+def hand_tangent(theta_h: float) -> Array:
+    """``e_t``: ``e_n`` rotated by +90°, world frame."""
+    return np.array([np.cos(theta_h), np.sin(theta_h)])
+
+
+def hand_frame(theta_h: float) -> Array:
+    """2×2 matrix whose columns are ``e_n`` and ``e_t``: maps hand-frame ``(n, t)`` to world ``(x, y)``."""
+    return np.column_stack((hand_normal(theta_h), hand_tangent(theta_h)))
+
+
+def planar_hand_to_world(theta_h: float) -> Array:
+    """3×3 map of hand-frame ``(n, t, θ)`` vectors (forces/torque or displacements) to world ``(x, y, θ)``."""
+    out = np.eye(3)
+    out[:2, :2] = hand_frame(theta_h)
+    return out
+
+
+def wrench_hand_to_world(theta_h: float, wrench_hand: ArrayLike) -> Array:
+    """Hand wrench ``(f_n, f_t, τ)`` to world ``(f_x, f_y, τ)``; the torque stays about the hand centre."""
+    return planar_hand_to_world(theta_h) @ np.asarray(wrench_hand, dtype=float)
+
+
+def wrench_world_to_hand(theta_h: float, wrench_world: ArrayLike) -> Array:
+    """World ``(f_x, f_y, τ)`` (torque about the hand centre) to hand-frame ``(f_n, f_t, τ)``."""
+    return planar_hand_to_world(theta_h).T @ np.asarray(wrench_world, dtype=float)
+
+
+def twist_hand_to_world(theta_h: float, twist_hand: ArrayLike) -> Array:
+    """Hand-frame increment ``(Δn, Δt, Δθ)`` of the hand pose to the world increment ``(Δx, Δy, Δθ)``."""
+    return planar_hand_to_world(theta_h) @ np.asarray(twist_hand, dtype=float)
+
+
+def twist_world_to_hand(theta_h: float, twist_world: ArrayLike) -> Array:
+    """World increment ``(Δx, Δy, Δθ)`` of the hand pose to the hand frame ``(Δn, Δt, Δθ)``."""
+    return planar_hand_to_world(theta_h).T @ np.asarray(twist_world, dtype=float)
+
+
+def shift_torque(wrench_world: ArrayLike, from_point: ArrayLike, to_point: ArrayLike) -> Array:
+    """Re-express a planar world wrench's torque about ``to_point`` instead of ``from_point`` (m)."""
+    fx, fy, tau = np.asarray(wrench_world, dtype=float)
+    rx, ry = np.asarray(from_point, dtype=float) - np.asarray(to_point, dtype=float)
+    return np.array([fx, fy, tau + rx * fy - ry * fx])
+
+
+def hand_pose_from_contact(theta_o: float, s_h: float, d: float, r_o: ArrayLike) -> Array:
+    """World hand pose ``(x_h, y_h, θ_h)`` of a flush hand (``θ_h = θ_o``), paper eq. 19.
+
+    ``s_h`` and ``d`` in m, ``r_o = (x_o, y_o)`` the ground contact (m), ``theta_o`` (rad).
+    """
+    r_h = np.asarray(r_o, dtype=float) - s_h * hand_tangent(theta_o) - d * hand_normal(theta_o)
+    return np.array([r_h[0], r_h[1], theta_o])
+
+
+def contact_coordinates(hand_pose: ArrayLike, r_o: ArrayLike) -> tuple[float, float]:
+    """``(s_h, d)`` of the ground contact ``r_o`` seen from the hand pose (paper eqs. 19, 21), m."""
+    x_h, y_h, theta_h = np.asarray(hand_pose, dtype=float)
+    rel = np.asarray(r_o, dtype=float) - np.array([x_h, y_h])
+    return float(rel @ hand_tangent(theta_h)), float(rel @ hand_normal(theta_h))
+
+
+# --- polygons -----------------------------------------------------------------------------------
+
+
+def as_polygon(vertices: ArrayLike) -> Array:
+    """Vertices as an ``(n, 2)`` float array; raises ``ValueError`` unless ``n ≥ 3`` and all finite."""
+    poly = np.asarray(vertices, dtype=float)
+    if poly.ndim != 2 or poly.shape[1] != 2:
+        raise ValueError(f"polygon vertices must have shape (n, 2), got {poly.shape}")
+    if poly.shape[0] < 3:
+        raise ValueError(f"a polygon needs at least 3 vertices, got {poly.shape[0]}")
+    if not np.all(np.isfinite(poly)):
+        raise ValueError("polygon vertices must be finite numbers")
+    return poly
+
+
+def signed_area(vertices: ArrayLike) -> float:
+    """Signed area (m²), positive for counter-clockwise vertex order (shoelace formula)."""
+    poly = as_polygon(vertices)
+    x, y = poly[:, 0], poly[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
+def centroid(vertices: ArrayLike) -> Array:
+    """Area centroid of a simple polygon (m)."""
+    poly = as_polygon(vertices)
+    x, y = poly[:, 0], poly[:, 1]
+    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    cross = x * yn - xn * y
+    area = 0.5 * cross.sum()
+    if abs(area) < 1e-15:
+        raise ValueError("degenerate polygon: zero area")
+    return np.array([((x + xn) * cross).sum(), ((y + yn) * cross).sum()]) / (6.0 * area)
+
+
+def is_convex(vertices: ArrayLike, tol: float = 1e-12) -> bool:
+    """True if the polygon is strictly convex and simple, in either orientation."""
+    poly = as_polygon(vertices)
+    edges = np.roll(poly, -1, axis=0) - poly
+    turns = edges[:, 0] * np.roll(edges[:, 1], -1) - edges[:, 1] * np.roll(edges[:, 0], -1)
+    if not (np.all(turns > tol) or np.all(turns < -tol)):
+        return False
+    # Strict, same-sign turns with a total winding of exactly one turn rule out star polygons.
+    headings = np.arctan2(edges[:, 1], edges[:, 0])
+    winding = np.sum(wrap_angle(np.roll(headings, -1) - headings))
+    return bool(abs(abs(winding) - 2.0 * np.pi) < 1e-6)
+
+
+def lamina_inertia(vertices: ArrayLike, mass: float) -> float:
+    """Polar moment of inertia (kg·m²) of a uniform lamina about its centroid, out-of-plane axis."""
+    poly = as_polygon(vertices) - centroid(vertices)
+    x, y = poly[:, 0], poly[:, 1]
+    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    cross = x * yn - xn * y
+    area = 0.5 * cross.sum()
+    second_moment = (cross * (x * x + x * xn + xn * xn + y * y + y * yn + yn * yn)).sum() / 12.0
+    return float(mass * second_moment / area)
+
+
+def face_normal(vertices: ArrayLike, face: int) -> Array:
+    """Outward unit normal of face ``face`` (from vertex ``face`` to ``face + 1``) of a CCW polygon."""
+    poly = as_polygon(vertices)
+    edge = poly[(face + 1) % len(poly)] - poly[face % len(poly)]
+    return np.array([edge[1], -edge[0]]) / np.linalg.norm(edge)
+
+
+def transform_points(points: ArrayLike, pose: ArrayLike) -> Array:
+    """Points given in a body frame, mapped to the world by the body pose ``(x, y, θ)``."""
+    x, y, theta = np.asarray(pose, dtype=float)
+    return np.asarray(points, dtype=float) @ rotation(theta).T + np.array([x, y])
