@@ -27,6 +27,7 @@ so that ``qpos`` equals the CCW planar angle.
 
 from __future__ import annotations
 
+import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -48,18 +49,31 @@ def wrap_angle(theta: ArrayLike) -> Array | float:
     return float(wrapped) if np.ndim(wrapped) == 0 else wrapped
 
 
-def hand_normal(theta_h: float) -> Array:
-    """``e_n``: unit normal from the hand into the object, world frame, for hand angle ``θ_h``."""
+def _is_symbolic(value: object) -> bool:
+    return isinstance(value, ca.SX | ca.MX)
+
+
+def hand_normal(theta_h: float | ca.SX | ca.MX) -> Array | ca.SX | ca.MX:
+    """``e_n``: unit normal from the hand into the object, world frame, for hand angle ``θ_h``.
+
+    Accepts a float (returns a NumPy vector) or a CasADi symbol (returns a CasADi column).
+    """
+    if _is_symbolic(theta_h):
+        return ca.vertcat(ca.sin(theta_h), -ca.cos(theta_h))
     return np.array([np.sin(theta_h), -np.cos(theta_h)])
 
 
-def hand_tangent(theta_h: float) -> Array:
-    """``e_t``: ``e_n`` rotated by +90°, world frame."""
+def hand_tangent(theta_h: float | ca.SX | ca.MX) -> Array | ca.SX | ca.MX:
+    """``e_t``: ``e_n`` rotated by +90°, world frame (NumPy or CasADi, like :func:`hand_normal`)."""
+    if _is_symbolic(theta_h):
+        return ca.vertcat(ca.cos(theta_h), ca.sin(theta_h))
     return np.array([np.cos(theta_h), np.sin(theta_h)])
 
 
-def hand_frame(theta_h: float) -> Array:
+def hand_frame(theta_h: float | ca.SX | ca.MX) -> Array | ca.SX | ca.MX:
     """2×2 matrix whose columns are ``e_n`` and ``e_t``: maps hand-frame ``(n, t)`` to world ``(x, y)``."""
+    if _is_symbolic(theta_h):
+        return ca.horzcat(hand_normal(theta_h), hand_tangent(theta_h))
     return np.column_stack((hand_normal(theta_h), hand_tangent(theta_h)))
 
 
@@ -101,7 +115,11 @@ def hand_pose_from_contact(theta_o: float, s_h: float, d: float, r_o: ArrayLike)
     """World hand pose ``(x_h, y_h, θ_h)`` of a flush hand (``θ_h = θ_o``), paper eq. 19.
 
     ``s_h`` and ``d`` in m, ``r_o = (x_o, y_o)`` the ground contact (m), ``theta_o`` (rad).
+    Works on floats or CasADi symbols (then ``r_o`` is a 2-vector symbol).
     """
+    if _is_symbolic(theta_o):
+        r_h = r_o - s_h * hand_tangent(theta_o) - d * hand_normal(theta_o)
+        return ca.vertcat(r_h, theta_o)
     r_h = np.asarray(r_o, dtype=float) - s_h * hand_tangent(theta_o) - d * hand_normal(theta_o)
     return np.array([r_h[0], r_h[1], theta_o])
 
