@@ -1,0 +1,170 @@
+"""What every simulated plant offers: its parameters, its start configuration and its interface.
+
+Frames and signs are those of :mod:`ccopt.geometry`: world ``(x, y, θ)`` with ``y`` up, hand pose
+at the centre of the hand's contact face, hand wrench ``(f_n, f_t, τ)`` exerted by the hand on the
+object in the hand contact frame, ``τ`` about the face centre.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from numbers import Real
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ccopt.plant.truth import Truth
+
+
+def _real(name: str, value: object) -> float:
+    if isinstance(value, bool) or not isinstance(value, Real):
+        raise TypeError(f"{name} must be a real number, got {type(value).__name__} {value!r}")
+    number = float(value)
+    if not math.isfinite(number):
+        raise ValueError(f"{name} must be finite, got {number!r}")
+    return number
+
+
+def _positive(name: str, value: object) -> float:
+    number = _real(name, value)
+    if number <= 0.0:
+        raise ValueError(f"{name} must be positive, got {number!r}")
+    return number
+
+
+@dataclass(frozen=True)
+class PlantParams:
+    """Physical and numerical parameters of a simulated plant.
+
+    Attributes:
+        l_h: half-length of the hand's flat contact face, m.
+        K: impedance stiffness ``(k_x, k_y, k_θ)`` in N/m, N/m, N·m/rad, world axes, acting at the
+            hand contact-face centre.
+        damping_ratio: impedance damping as a fraction of critical damping of the free hand.
+        timestep: simulation step, s.
+        hand_thickness: extent of the hand box behind its contact face, m.
+        hand_mass: mass of the moving hand, kg (gravity compensated).
+        depth: out-of-plane extent of the object prism (the hand is 1.5× deeper), m.
+        contact_timeconst: MuJoCo ``solref`` time constant of every contact pair, s.
+        impratio: MuJoCo ratio of frictional to normal constraint impedance.
+
+    Raises:
+        TypeError: a field is not a real number.
+        ValueError: a field is non-finite or out of range (the message names it).
+    """
+
+    l_h: float = 0.05
+    K: tuple[float, float, float] = (2000.0, 2000.0, 60.0)
+    damping_ratio: float = 1.0
+    timestep: float = 1e-3
+    hand_thickness: float = 0.02
+    hand_mass: float = 1.0
+    depth: float = 0.04
+    contact_timeconst: float = 0.005
+    impratio: float = 100.0
+
+    def __post_init__(self) -> None:
+        for name in ("l_h", "hand_thickness", "hand_mass", "depth", "impratio"):
+            object.__setattr__(self, name, _positive(name, getattr(self, name)))
+        timestep = _positive("timestep", self.timestep)
+        if timestep > 0.01:
+            raise ValueError(f"timestep must be at most 0.01 s, got {timestep!r}")
+        object.__setattr__(self, "timestep", timestep)
+        timeconst = _positive("contact_timeconst", self.contact_timeconst)
+        if timeconst < 2.0 * timestep:
+            raise ValueError(
+                f"contact_timeconst must be at least twice the timestep ({2.0 * timestep} s), "
+                f"got {timeconst!r}"
+            )
+        object.__setattr__(self, "contact_timeconst", timeconst)
+        ratio = _real("damping_ratio", self.damping_ratio)
+        if ratio < 0.0:
+            raise ValueError(f"damping_ratio must be non-negative, got {ratio!r}")
+        object.__setattr__(self, "damping_ratio", ratio)
+        if isinstance(self.K, str) or np.ndim(self.K) != 1 or len(self.K) != 3:
+            raise ValueError(f"K must be three stiffnesses (k_x, k_y, k_θ), got {self.K!r}")
+        stiffness = tuple(_positive(f"K[{i}]", k) for i, k in enumerate(self.K))
+        object.__setattr__(self, "K", stiffness)
+
+    @property
+    def hand_inertia(self) -> float:
+        """Hand moment of inertia about the contact-face centre (out of plane), kg·m²."""
+        length, thick = 2.0 * self.l_h, self.hand_thickness
+        return self.hand_mass * ((length**2 + thick**2) / 12.0 + 0.25 * thick**2)
+
+    @property
+    def D(self) -> tuple[float, float, float]:
+        """Impedance damping ``(d_x, d_y, d_θ)``, N·s/m, N·s/m, N·m·s/rad, from ``damping_ratio``."""
+        masses = (self.hand_mass, self.hand_mass, self.hand_inertia)
+        return tuple(2.0 * self.damping_ratio * math.sqrt(k * m) for k, m in zip(self.K, masses, strict=True))
+
+
+@dataclass(frozen=True)
+class StartConfig:
+    """Where a run starts: the hand flush on one object face, pressing, the object on one vertex.
+
+    Attributes:
+        hand_face: index of the object face the hand is flush on (see :mod:`ccopt.objects`).
+        theta_o: orientation of that face, rad (equals ``θ_h`` while flush; 0 = hand on top).
+        s_h: hand sliding position ``(r_o − r_h)·e_t``, m.
+        normal_force: hand normal force the start target is set to press with, N.
+        x_o: ground-contact x (the object's lowest vertex), m.
+        settle_time: simulated time to settle before the run starts, s.
+    """
+
+    hand_face: int = 0
+    theta_o: float = 0.0
+    s_h: float = 0.0
+    normal_force: float = 5.0
+    x_o: float = 0.0
+    settle_time: float = 0.5
+
+    def __post_init__(self) -> None:
+        face = self.hand_face
+        if isinstance(face, bool) or not isinstance(face, int | np.integer):
+            raise TypeError(f"hand_face must be an integer, got {type(face).__name__} {face!r}")
+        if face < 0:
+            raise ValueError(f"hand_face must be non-negative, got {face}")
+        object.__setattr__(self, "hand_face", int(face))
+        for name in ("theta_o", "s_h", "x_o"):
+            object.__setattr__(self, name, _real(name, getattr(self, name)))
+        object.__setattr__(self, "normal_force", _positive("normal_force", self.normal_force))
+        settle = _real("settle_time", self.settle_time)
+        if settle < 0.0:
+            raise ValueError(f"settle_time must be non-negative, got {settle!r}")
+        object.__setattr__(self, "settle_time", settle)
+
+
+@runtime_checkable
+class Plant(Protocol):
+    """A simulated hand–object–ground system driven by a planar hand impedance."""
+
+    time: float
+    """Simulated time, s."""
+    timestep: float
+    """Simulation step, s."""
+    params: PlantParams
+
+    def set_target(self, pose: ArrayLike, velocity: ArrayLike | None = None) -> None:
+        """Hand impedance target, world ``(x, y, θ)`` (m, rad), with optional velocity feed-forward."""
+
+    def target(self) -> np.ndarray:
+        """Current impedance target, world ``(x, y, θ)``."""
+
+    def step(self, n_steps: int = 1) -> None:
+        """Advance the simulation by ``n_steps`` timesteps."""
+
+    def hand_pose(self) -> np.ndarray:
+        """True world ``(x_h, y_h, θ_h)`` of the hand contact-face centre."""
+
+    def hand_wrench(self) -> np.ndarray:
+        """True wrench the hand exerts on the object, hand frame ``(f_n, f_t, τ)``, ``τ`` about the
+        face centre: what an ideal, gravity-compensated wrist F/T sensor reports."""
+
+    def truth(self) -> Truth:
+        """Ground truth of the contact configuration."""
+
+    def push_object(self, force: ArrayLike, duration: float) -> None:
+        """Apply world force ``(f_x, f_y)`` (N) at the object's centroid for ``duration`` s from now."""

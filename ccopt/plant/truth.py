@@ -1,0 +1,143 @@
+"""Ground truth of the contact configuration, from the simulator's state (metrics and plots only).
+
+The estimator and controller never read this module's output. Conventions are those of
+:mod:`ccopt.geometry`; :func:`compute_truth` is a pure function of poses and velocities so that
+every plant reports truth the same way.
+
+Thresholds:
+    * a contact slides when its sliding speed exceeds :data:`SLIDE_SPEED` (1 mm/s): the hand when
+      ``|ṡ_h|`` does, the ground when ``|ṡ_g|`` (the horizontal speed of the object's lowest
+      vertex) does;
+    * the hand pivots when ``|θ_o − θ_h|`` exceeds :data:`PIVOT_ANGLE` (0.5°).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ccopt import geometry
+from ccopt.objects import PlanarObject
+
+SLIDE_SPEED = 1e-3
+"""Sliding-speed threshold, m/s: slower contacts are reported as sticking."""
+
+PIVOT_ANGLE = math.radians(0.5)
+"""Hand pivoting threshold on ``|θ_o − θ_h|``, rad: smaller is reported as flush."""
+
+LOWEST_TIE = 1e-4
+"""Vertices within this height (m) of the lowest one tie; the left-most of them is ``r_o``."""
+
+
+@dataclass(frozen=True)
+class Truth:
+    """True contact configuration at one instant.
+
+    Attributes:
+        time: s.
+        theta_o: orientation of the object face the hand is on, rad (same convention as ``θ_h``,
+            unwrapped to within ±π of ``θ_h``).
+        s_h: ``(r_o − r_h)·e_t`` with ``e_t`` of the hand, m.
+        s_g: ``x_o``, m.
+        d: ``(r_o − r_h)·e_n`` with ``e_n`` of the hand, m.
+        r_o: ground contact (the object's lowest vertex), world, m.
+        object_pose: object centroid and angle, world ``(x, y, φ)``, m and rad.
+        hand_mode: −1 / 0 / +1 for sliding with ``ṡ_h < 0`` / sticking / ``ṡ_h > 0``.
+        hand_geometry: −1 / 0 / +1 for pivoting with ``θ_o − θ_h < 0`` / flush / ``> 0``.
+        ground_mode: −1 / 0 / +1 for sliding with ``ṡ_g < 0`` / sticking / ``ṡ_g > 0``.
+        in_contact_hand: the hand touches the object.
+        in_contact_ground: the object touches the ground.
+        s_h_rate: ``ṡ_h``, m/s.
+        s_g_rate: ``ṡ_g``, m/s.
+    """
+
+    time: float
+    theta_o: float
+    s_h: float
+    s_g: float
+    d: float
+    r_o: np.ndarray
+    object_pose: np.ndarray
+    hand_mode: int
+    hand_geometry: int
+    ground_mode: int
+    in_contact_hand: bool
+    in_contact_ground: bool
+    s_h_rate: float
+    s_g_rate: float
+
+
+def _mode(rate: float, threshold: float) -> int:
+    return 0 if abs(rate) <= threshold else int(math.copysign(1.0, rate))
+
+
+def lowest_vertex(world_vertices: np.ndarray) -> int:
+    """Index of the ground-contact vertex: the lowest, ties (:data:`LOWEST_TIE`) to the left-most."""
+    heights = world_vertices[:, 1]
+    candidates = np.flatnonzero(heights <= heights.min() + LOWEST_TIE)
+    return int(candidates[np.argmin(world_vertices[candidates, 0])])
+
+
+def face_angle(obj: PlanarObject, face: int, object_angle: float) -> float:
+    """World orientation ``θ`` of ``face`` such that its outward normal is ``−e_n(θ)``, rad."""
+    normal = obj.face_normal(face)
+    return object_angle + math.atan2(normal[1], normal[0]) - 0.5 * math.pi
+
+
+def point_velocity(pose: ArrayLike, velocity: ArrayLike, point: ArrayLike) -> np.ndarray:
+    """World velocity of a material ``point`` of a body with ``pose`` and ``velocity`` ``(ẋ, ẏ, ω)``."""
+    x, y, _ = np.asarray(pose, dtype=float)
+    vx, vy, omega = np.asarray(velocity, dtype=float)
+    px, py = np.asarray(point, dtype=float) - (x, y)
+    return np.array([vx - omega * py, vy + omega * px])
+
+
+def compute_truth(
+    time: float,
+    obj: PlanarObject,
+    hand_face: int,
+    object_pose: ArrayLike,
+    object_velocity: ArrayLike,
+    hand_pose: ArrayLike,
+    hand_velocity: ArrayLike,
+    in_contact_hand: bool,
+    in_contact_ground: bool,
+) -> Truth:
+    """Truth from the object pose/velocity (centroid, world ``(x, y, φ)``) and the hand pose/velocity
+    (contact-face centre, world ``(x, y, θ)``); units m, rad, m/s, rad/s.
+
+    ``ṡ_h = (v(r_o) − v_h)·e_t − ω_h d`` is the exact derivative of ``s_h`` with ``r_o`` a material
+    point of the object; ``ṡ_g`` is the x-velocity of that point.
+    """
+    object_pose = np.asarray(object_pose, dtype=float)
+    hand_pose = np.asarray(hand_pose, dtype=float)
+    world_vertices = geometry.transform_points(obj.vertices, object_pose)
+    r_o = world_vertices[lowest_vertex(world_vertices)]
+    s_h, d = geometry.contact_coordinates(hand_pose, r_o)
+    theta_h = float(hand_pose[2])
+    raw = face_angle(obj, hand_face, float(object_pose[2]))
+    theta_o = theta_h + geometry.wrap_angle(raw - theta_h)
+    v_ro = point_velocity(object_pose, object_velocity, r_o)
+    hand_velocity = np.asarray(hand_velocity, dtype=float)
+    s_h_rate = float((v_ro - hand_velocity[:2]) @ geometry.hand_tangent(theta_h) - hand_velocity[2] * d)
+    s_g_rate = float(v_ro[0])
+    delta = theta_o - theta_h
+    return Truth(
+        time=float(time),
+        theta_o=theta_o,
+        s_h=s_h,
+        s_g=float(r_o[0]),
+        d=d,
+        r_o=r_o,
+        object_pose=object_pose.copy(),
+        hand_mode=_mode(s_h_rate, SLIDE_SPEED),
+        hand_geometry=_mode(delta, PIVOT_ANGLE),
+        ground_mode=_mode(s_g_rate, SLIDE_SPEED),
+        in_contact_hand=bool(in_contact_hand),
+        in_contact_ground=bool(in_contact_ground),
+        s_h_rate=s_h_rate,
+        s_g_rate=s_g_rate,
+    )
