@@ -1,0 +1,457 @@
+"""The impedance-target QP of paper eqs. 22–26, in the soft form of DESIGN.md §5.
+
+Per control tick, find the hand-frame change of the impedance target ``Δx`` (m, m, rad; order
+``(n, t, θ)``) and the wrench change ``Δw = K Δx`` that
+
+    minimise    α₀‖Δx‖² + Σᵢ αᵢ (vᵢᵀΔx − δᵢ)²                 (δᵢ = βᵢ Δεᵢ, paper eq. 26)
+    subject to  nⱼᵀ(w_meas + γⱼ K Δx) ≤ bⱼ  for every active row j.
+
+The problem has a fixed maximum size (:data:`MAX_ROWS` rows, :data:`MAX_TERMS` tracking terms) and
+an active-row mask, so that one compiled solver serves every contact configuration. It is always
+solved in the soft form: one slack ``t ≥ 0`` relaxes every active row (``A Δx − t ≤ ub``) at a cost
+``ρ t + ½ t²`` with ``ρ`` (:data:`SLACK_WEIGHT`) far above any multiplier. On feasible instances the
+answer equals the hard QP's; otherwise the solver returns the least-violating step and reports
+``feasible = False`` with the violation ``t`` (N or N·m, the row's units).
+
+Three interchangeable back ends (:func:`make_solver`):
+
+``codegen``
+    CasADi ``conic`` with the ``daqp`` plugin, C code generated once, compiled with the system C
+    compiler, cached on disk by a hash of the generated code (``$CCOPT_CACHE_DIR``, else
+    ``$XDG_CACHE_HOME/ccopt``, else ``~/.cache/ccopt``), loaded with ``casadi.external`` and called
+    through a ``FunctionBuffer``. Falls back to ``casadi``, with a warning, where no compiler works.
+``casadi``
+    The same CasADi function, evaluated in process.
+``cvxpy``
+    The same matrices in cvxpy, solved by Clarabel (offline studies and cross-checks). The soft
+    form is solved lexicographically (minimum violation first, then the cost), its ``ρ → ∞`` limit.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal, Protocol
+
+import casadi as ca
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ccopt.casadi_eval import BufferedFunction
+
+MAX_ROWS = 10
+"""Maximum number of wrench rows (six cone rows, force limits, spares)."""
+
+MAX_TERMS = 4
+"""Maximum number of tracking terms ``αᵢ (vᵢᵀΔx − δᵢ)²`` in the cost."""
+
+SLACK_WEIGHT = 1e3
+"""``ρ``: linear cost of the slack; far above any multiplier of the hard problem.
+
+DESIGN.md suggests 1e8, but with steps in metres and rows in newtons the hard problem's multipliers
+are tiny (``|∇cost| ≲ 1`` over row gradients ``γ K n ≳ 60``, so ``λ ≲ 0.02`` for tracking weights up
+to ~10), and 1e8 against a unit Hessian costs DAQP's dual active set up to 30 % of the violation on
+infeasible ticks through cancellation. 1e3 keeps a margin of ~5·10⁴ over the multipliers and solves
+infeasible ticks to ~1e-6 relative (measured on 600 instances against an LP)."""
+
+INFEASIBLE_SLACK = 1e-7
+"""Slack (row units) above which an instance is reported infeasible."""
+
+Backend = Literal["codegen", "casadi", "cvxpy"]
+BACKENDS: tuple[Backend, ...] = ("codegen", "casadi", "cvxpy")
+
+
+# --- the instance and its packing -----------------------------------------------------------------
+
+_LAYOUT = (
+    ("stiffness", (3, 3)),
+    ("wrench", (3,)),
+    ("rows", (MAX_ROWS, 3)),
+    ("bounds", (MAX_ROWS,)),
+    ("gains", (MAX_ROWS,)),
+    ("active", (MAX_ROWS,)),
+    ("regularization", ()),
+    ("directions", (MAX_TERMS, 3)),
+    ("weights", (MAX_TERMS,)),
+    ("targets", (MAX_TERMS,)),
+)
+_SLICES: dict[str, slice] = {}
+_offset = 0
+for _name, _shape in _LAYOUT:
+    _size = int(np.prod(_shape))
+    _SLICES[_name] = slice(_offset, _offset + _size)
+    _offset += _size
+N_PARAMETERS = _offset
+"""Length of the packed parameter vector of the compiled solver."""
+
+
+@dataclass(frozen=True)
+class QPInstance:
+    """One tick's QP, in the hand frame ``(n, t, θ)``.
+
+    Attributes:
+        stiffness: ``K`` (3×3), N/m and N·m/rad: ``Δw = K Δx``.
+        wrench: measured hand wrench ``w_meas = (f_n, f_t, τ)`` (N, N, N·m).
+        rows: ``nⱼ`` (m×3), ``m ≤ MAX_ROWS``; ``nⱼᵀ w ≤ bⱼ``.
+        bounds: ``bⱼ`` (m,).
+        gains: ``γⱼ`` (m,), scaling of the predicted wrench change per row.
+        active: which rows are enforced (m,) bool.
+        regularization: ``α₀ > 0``.
+        directions: ``vᵢ`` (k×3), ``k ≤ MAX_TERMS``, hand-frame target directions.
+        weights: ``αᵢ ≥ 0`` (k,).
+        targets: ``δᵢ = βᵢ Δεᵢ`` (k,), in the units of ``θ_o``/``s_h``/``s_g`` (rad or m).
+    """
+
+    stiffness: np.ndarray
+    wrench: np.ndarray
+    rows: np.ndarray
+    bounds: np.ndarray
+    gains: np.ndarray
+    active: np.ndarray
+    regularization: float
+    directions: np.ndarray
+    weights: np.ndarray
+    targets: np.ndarray
+    packed: np.ndarray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        n_rows = _check_matrix("rows", self.rows, MAX_ROWS, 3)
+        n_terms = _check_matrix("directions", self.directions, MAX_TERMS, 3)
+        for name, length in (("bounds", n_rows), ("gains", n_rows), ("active", n_rows)):
+            _check_vector(name, getattr(self, name), length)
+        for name in ("weights", "targets"):
+            _check_vector(name, getattr(self, name), n_terms)
+        _check_vector("wrench", self.wrench, 3)
+        if np.shape(self.stiffness) != (3, 3) or not np.all(np.isfinite(self.stiffness)):
+            raise ValueError(f"stiffness must be a finite 3×3 matrix, got {self.stiffness!r}")
+        if not (np.isfinite(self.regularization) and self.regularization > 0.0):
+            raise ValueError(f"regularization must be positive, got {self.regularization!r}")
+        if np.any(np.asarray(self.weights) < 0.0):
+            raise ValueError(f"weights must be non-negative, got {self.weights!r}")
+        object.__setattr__(self, "packed", _pack(self, n_rows, n_terms))
+
+
+def _check_matrix(name: str, value: ArrayLike, max_rows: int, cols: int) -> int:
+    shape = np.shape(value)
+    if len(shape) != 2 or shape[1] != cols or shape[0] > max_rows:
+        raise ValueError(f"{name} must have shape (m ≤ {max_rows}, {cols}), got {shape}")
+    if not np.all(np.isfinite(value)):
+        raise ValueError(f"{name} must be finite, got {value!r}")
+    return shape[0]
+
+
+def _check_vector(name: str, value: ArrayLike, length: int) -> None:
+    if np.shape(value) != (length,):
+        raise ValueError(f"{name} must have shape ({length},), got {np.shape(value)}")
+    if not np.all(np.isfinite(np.asarray(value, dtype=float))):
+        raise ValueError(f"{name} must be finite, got {value!r}")
+
+
+def _pack(instance: QPInstance, n_rows: int, n_terms: int) -> np.ndarray:
+    packed = np.zeros(N_PARAMETERS)
+
+    def put(name: str, value: ArrayLike, count: int | None = None) -> None:
+        view = packed[_SLICES[name]]
+        flat = np.asarray(value, dtype=float).reshape(-1, order="F")
+        if count is None:
+            view[:] = flat
+        else:  # a (count, ...) block into a (MAX, ...) slot, column-major like CasADi
+            shape = dict(_LAYOUT)[name]
+            block = np.zeros(shape)
+            block[:count] = np.asarray(value, dtype=float)
+            view[:] = block.reshape(-1, order="F")
+
+    put("stiffness", instance.stiffness)
+    put("wrench", instance.wrench)
+    put("rows", instance.rows, n_rows)
+    put("bounds", instance.bounds, n_rows)
+    put("gains", instance.gains, n_rows)
+    put("active", np.asarray(instance.active, dtype=float), n_rows)
+    put("regularization", instance.regularization)
+    put("directions", instance.directions, n_terms)
+    put("weights", instance.weights, n_terms)
+    put("targets", instance.targets, n_terms)
+    return packed
+
+
+@dataclass(frozen=True)
+class QPSolution:
+    """The step and its diagnostics.
+
+    Attributes:
+        step: ``Δx_tar`` in the hand frame ``(Δn, Δt, Δθ)`` (m, m, rad).
+        wrench_change: ``Δw = K Δx_tar`` (N, N, N·m).
+        slack: violation ``t`` of the active rows that the step could not avoid (row units).
+        feasible: ``slack ≤ INFEASIBLE_SLACK``.
+        backend: which back end solved it.
+    """
+
+    step: np.ndarray
+    wrench_change: np.ndarray
+    slack: float
+    feasible: bool
+    backend: str
+
+
+class QPSolver(Protocol):
+    backend: str
+
+    def solve(self, instance: QPInstance) -> QPSolution: ...
+
+
+# --- the formulation, written once ---------------------------------------------------------------
+
+
+def _unpack(parameters: ca.SX) -> dict[str, ca.SX]:
+    out = {}
+    for name, shape in _LAYOUT:
+        flat = parameters[_SLICES[name]]
+        out[name] = ca.reshape(flat, *shape) if len(shape) == 2 else flat
+    return out
+
+
+def build_qp_matrices() -> ca.Function:
+    """``p → (H (4×4), g (4), A (MAX_ROWS×4), ub (MAX_ROWS))`` of the soft QP in ``z = (Δx, t)``.
+
+    Cost ``½ zᵀHz + gᵀz`` (the paper's cost, expanded, plus ``ρ t + ½ t²``), rows ``A z ≤ ub``,
+    ``t ≥ 0``. Inactive rows become ``0·Δx − t ≤ 1``: always slack, so interior-point solvers keep
+    a strict interior (``0 ≤ 0`` rows would break Slater's condition).
+    """
+    parameters = ca.SX.sym("p", N_PARAMETERS)
+    q = _unpack(parameters)
+    hessian = 2.0 * q["regularization"] * ca.SX.eye(3)
+    gradient = ca.SX.zeros(3)
+    for i in range(MAX_TERMS):
+        direction = q["directions"][i, :].T
+        hessian += 2.0 * q["weights"][i] * (direction @ direction.T)
+        gradient -= 2.0 * q["weights"][i] * q["targets"][i] * direction
+    mask = q["active"]
+    rows = ca.diag(mask * q["gains"]) @ q["rows"] @ q["stiffness"]
+    upper = mask * (q["bounds"] - q["rows"] @ q["wrench"]) + (1.0 - mask)
+    return ca.Function(
+        "ccopt_qp_matrices",
+        [parameters],
+        [
+            ca.diagcat(hessian, 1.0),
+            ca.vertcat(gradient, SLACK_WEIGHT),
+            ca.horzcat(rows, -ca.SX.ones(MAX_ROWS)),
+            upper,
+        ],
+        ["p"],
+        ["H", "g", "A", "ub"],
+    )
+
+
+def build_qp_function(plugin: str = "daqp") -> ca.Function:
+    """``p → z = (Δx, t)``: the soft QP solved by CasADi's ``conic`` ``plugin`` (symbolic pipeline)."""
+    matrices = build_qp_matrices()
+    parameters = ca.MX.sym("p", N_PARAMETERS)
+    hessian, gradient, rows, upper = matrices(parameters)
+    conic = ca.conic(
+        "ccopt_qp_conic",
+        plugin,
+        {"h": ca.Sparsity.dense(4, 4), "a": ca.Sparsity.dense(MAX_ROWS, 4)},
+        {"error_on_fail": False},
+    )
+    lower_bound = ca.DM([-ca.inf, -ca.inf, -ca.inf, 0.0])
+    solution = conic(
+        h=ca.densify(hessian),
+        g=gradient,
+        a=ca.densify(rows),
+        lba=-ca.inf * ca.DM.ones(MAX_ROWS),
+        uba=upper,
+        lbx=lower_bound,
+        ubx=ca.inf * ca.DM.ones(4),
+    )
+    return ca.Function("ccopt_qp", [parameters], [solution["x"]], ["p"], ["z"])
+
+
+# --- back ends -------------------------------------------------------------------------------------
+
+
+def _solution(z: np.ndarray, instance: QPInstance, backend: str) -> QPSolution:
+    step = z[:3].copy()  # z may be a solver's reusable output buffer
+    slack = max(float(z[3]), 0.0)
+    return QPSolution(
+        step=step,
+        wrench_change=np.asarray(instance.stiffness) @ step,
+        slack=slack,
+        feasible=slack <= INFEASIBLE_SLACK,
+        backend=backend,
+    )
+
+
+class CasadiQPSolver:
+    """The CasADi/DAQP function evaluated in process (the ``casadi`` back end)."""
+
+    backend = "casadi"
+
+    def __init__(self, function: ca.Function | None = None) -> None:
+        self._function = BufferedFunction(function if function is not None else build_qp_function())
+        self._z = np.zeros(4)
+
+    def solve(self, instance: QPInstance) -> QPSolution:
+        return _solution(self._function.call_flat(instance.packed, self._z), instance, self.backend)
+
+
+class CodegenQPSolver(CasadiQPSolver):
+    """The same function as generated C, compiled once and cached (the ``codegen`` back end).
+
+    Attributes:
+        library: path of the compiled shared library.
+        cache_hit: True if the library was loaded from the cache instead of compiled.
+    """
+
+    backend = "codegen"
+
+    def __init__(self, cache_dir: Path | None = None, compiler: str | None = None) -> None:
+        function = build_qp_function()
+        self.library, self.cache_hit = compile_function(function, cache_dir, compiler)
+        super().__init__(ca.external(function.name(), str(self.library)))
+
+
+class CvxpyQPSolver:
+    """The same QP in cvxpy, solved by Clarabel (the ``cvxpy`` back end).
+
+    The matrices come from :func:`build_qp_matrices` (the one formulation); the problem is built
+    per call with a native quadratic objective (a parametrised ``sum_squares`` goes to Clarabel as
+    a second-order cone and was seen to stall), in scaled variables ``y = Δx / STEP_SCALE`` with a
+    unit-size Hessian, because Clarabel's tolerances are absolute and a tick's cost is tiny in SI
+    units. The soft form is solved lexicographically: the hard QP first and, if it is infeasible,
+    the least violation ``t*`` by an LP and then the cost under rows relaxed by ``t*``.
+    """
+
+    backend = "cvxpy"
+    STEP_SCALE = 1e-3
+
+    def __init__(self) -> None:
+        import cvxpy as cp
+
+        self._cp = cp
+        self._matrices = BufferedFunction(build_qp_matrices())
+
+    def _solve(self, problem: object) -> str:
+        """Solve with tight, then looser tolerances until Clarabel decides; failures become a status."""
+        status = "solver_error"
+        for tolerance in (1e-10, 1e-8):
+            try:
+                problem.solve(
+                    solver="CLARABEL", tol_gap_abs=tolerance, tol_gap_rel=tolerance, tol_feas=tolerance
+                )
+            except self._cp.error.SolverError:
+                continue
+            status = problem.status
+            if status in ("optimal", "infeasible"):
+                break
+        return status
+
+    def solve(self, instance: QPInstance) -> QPSolution:
+        cp = self._cp
+        hessian, gradient, rows, upper = self._matrices(instance.packed)
+        scaled_hessian = hessian[:3, :3] * self.STEP_SCALE**2
+        cost_scale = 1.0 / np.max(np.abs(scaled_hessian))
+        rows = rows[:, :3] * self.STEP_SCALE
+        step, slack = cp.Variable(3), cp.Variable(nonneg=True)
+        cost = 0.5 * cp.quad_form(step, cp.psd_wrap(scaled_hessian * cost_scale))
+        cost = cost + (gradient[:3] * self.STEP_SCALE * cost_scale) @ step
+        least_violation = 0.0
+        if self._solve(cp.Problem(cp.Minimize(cost), [rows @ step <= upper])) == "infeasible":
+            self._solve(cp.Problem(cp.Minimize(slack), [rows @ step - slack <= upper]))
+            least_violation = max(float(slack.value), 0.0)
+            relaxed = upper + least_violation * (1.0 + 1e-9) + 1e-12
+            self._solve(cp.Problem(cp.Minimize(cost), [rows @ step <= relaxed]))
+        scaled_step = step.value if step.value is not None else np.zeros(3)
+        return _solution(np.append(scaled_step * self.STEP_SCALE, least_violation), instance, self.backend)
+
+
+def make_solver(backend: Backend = "codegen", **options: object) -> QPSolver:
+    """The QP solver of ``backend`` (``codegen``, ``casadi`` or ``cvxpy``).
+
+    ``codegen`` accepts ``cache_dir`` and ``compiler``; where compilation is impossible it warns
+    and returns the ``casadi`` back end.
+    """
+    if backend == "codegen":
+        try:
+            return CodegenQPSolver(**options)
+        except (OSError, RuntimeError, subprocess.CalledProcessError) as error:
+            warnings.warn(
+                f"code-generated QP unavailable ({error}); using the in-process CasADi solver",
+                RuntimeWarning,
+                stacklevel=2,
+            )
+            return CasadiQPSolver()
+    if backend == "casadi":
+        return CasadiQPSolver()
+    if backend == "cvxpy":
+        return CvxpyQPSolver()
+    raise ValueError(f"unknown QP backend {backend!r}; expected one of: {', '.join(BACKENDS)}")
+
+
+# --- code generation and the on-disk cache ---------------------------------------------------------
+
+
+def default_cache_dir() -> Path:
+    """Where compiled solvers live: ``$CCOPT_CACHE_DIR``, ``$XDG_CACHE_HOME/ccopt`` or ``~/.cache/ccopt``."""
+    if os.environ.get("CCOPT_CACHE_DIR"):
+        return Path(os.environ["CCOPT_CACHE_DIR"])
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "ccopt"
+
+
+def _compile_command(compiler: str, source: Path, library: Path) -> list[str]:
+    casadi_dir = Path(ca.__file__).parent
+    return [
+        compiler,
+        "-O3",
+        "-shared",
+        "-fPIC",
+        str(source),
+        "-o",
+        str(library),
+        f"-I{casadi_dir / 'include'}",
+        f"-I{casadi_dir / 'include' / 'daqp'}",
+        str(casadi_dir / "libdaqpstat.a"),
+        "-lm",
+    ]
+
+
+def compile_function(
+    function: ca.Function, cache_dir: Path | None = None, compiler: str | None = None
+) -> tuple[Path, bool]:
+    """Generate C for ``function``, compile it once, and return ``(library path, cache hit)``.
+
+    The library is named by a hash of the generated source, the CasADi version and the compile
+    command, so a changed formulation compiles anew. Compilation writes to a temporary file and
+    renames it into place, so concurrent processes never load a half-written library. Raises
+    ``RuntimeError`` if no compiler is found or compilation fails.
+    """
+    compiler = compiler or os.environ.get("CC") or "cc"
+    if shutil.which(compiler) is None:
+        raise RuntimeError(f"no C compiler {compiler!r} on PATH")
+    generator = ca.CodeGenerator(f"{function.name()}.c", {"with_header": False})
+    generator.add(function)
+    source = generator.dump()
+    cache = Path(cache_dir) if cache_dir is not None else default_cache_dir()
+    command_key = " ".join(_compile_command(compiler, Path("src.c"), Path("lib.so")))
+    digest = hashlib.sha256(f"{ca.__version__}\n{command_key}\n{source}".encode()).hexdigest()[:20]
+    library = cache / f"{function.name()}_{digest}.so"
+    if library.exists():
+        return library, True
+    cache.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=cache) as workdir:
+        source_path = Path(workdir) / f"{function.name()}.c"
+        source_path.write_text(source)
+        partial = Path(workdir) / library.name
+        result = subprocess.run(
+            _compile_command(compiler, source_path, partial), capture_output=True, text=True
+        )
+        if result.returncode != 0:
+            raise RuntimeError(f"compiling the QP failed: {result.stderr.strip()[:500]}")
+        os.replace(partial, library)
+    return library, False

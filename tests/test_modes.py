@@ -1,0 +1,38 @@
+"""Commanded motions remove exactly the rows that would block them."""
+
+import pytest
+
+from ccopt import modes
+from ccopt.contact import Row
+from ccopt.modes import ContactMode, Motion
+
+
+def test_each_slide_removes_exactly_its_row():
+    for motion, row in [
+        (Motion.SLIDE_HAND_POS, Row.HAND_SLIDE_POS),
+        (Motion.SLIDE_HAND_NEG, Row.HAND_SLIDE_NEG),
+        (Motion.SLIDE_GROUND_POS, Row.GROUND_SLIDE_POS),
+        (Motion.SLIDE_GROUND_NEG, Row.GROUND_SLIDE_NEG),
+    ]:
+        mask = modes.kept_rows(motion)
+        assert not mask[row]
+        assert mask.sum() == len(Row) - 1
+
+
+def test_pivot_and_hold_keep_every_row():
+    assert modes.kept_rows(Motion.PIVOT).all()
+    assert modes.kept_rows("hold").all()
+
+
+def test_configuration_of_a_motion():
+    assert modes.configuration(Motion.SLIDE_GROUND_NEG).ground_mode == ContactMode.SLIDE_NEG
+    assert modes.configuration(Motion.SLIDE_GROUND_NEG).hand_mode == ContactMode.STICK
+
+
+def test_signed_helpers_and_errors():
+    assert modes.slide_hand(0.01) is Motion.SLIDE_HAND_POS
+    assert modes.slide_ground(-0.01) is Motion.SLIDE_GROUND_NEG
+    with pytest.raises(ValueError, match="non-zero"):
+        modes.slide_hand(0.0)
+    with pytest.raises(ValueError, match="unknown motion 'twirl'"):
+        modes.kept_rows("twirl")
