@@ -1,0 +1,253 @@
+"""Contact-configuration sequences: the script a closed-loop run follows.
+
+A :class:`Schedule` is a list of :class:`Step` s, each a commanded admissible motion by an increment
+(pivot ``Δθ_o``, hand slide ``Δs_h``, ground slide ``Δs_g``) or a hold, with a tolerance on the
+estimated coordinate and a timeout. Inside ccopt increments are SI (rad, m); schedule files, like the
+CLI, use degrees and millimetres::
+
+    name: my-sequence
+    steps:
+      - {motion: slide_hand, delta_mm: 10}
+      - {motion: pivot, delta_deg: -7.2, tolerance_deg: 0.8, timeout_s: 6}
+      - {motion: slide_ground, delta_mm: 10}
+      - {motion: hold, duration_s: 1}
+
+Built in: ``paper`` (exploration — hand slides both ways, pivots both ways — then a long sequence
+in the paper's increments of 7.2°, 10 mm and 10 mm) and ``smoke`` (a short one for CI).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+import yaml
+
+from ccopt import modes
+from ccopt.modes import Motion
+
+Kind = Literal["pivot", "slide_hand", "slide_ground", "hold"]
+KINDS: tuple[Kind, ...] = ("pivot", "slide_hand", "slide_ground", "hold")
+COORDINATE = {"pivot": 0, "slide_hand": 1, "slide_ground": 2}
+"""Index of the coordinate ``(θ_o, s_h, s_g)`` each kind of step changes."""
+
+PIVOT_STEP = np.deg2rad(7.2)
+SLIDE_STEP = 0.010
+DEFAULT_TOLERANCE = {"pivot": np.deg2rad(0.7), "slide_hand": 0.0015, "slide_ground": 0.0015, "hold": 0.0}
+DEFAULT_TIMEOUT = 8.0
+
+
+@dataclass(frozen=True)
+class Step:
+    """One commanded motion.
+
+    Attributes:
+        kind: ``pivot``, ``slide_hand``, ``slide_ground`` or ``hold``.
+        delta: increment of the coordinate, rad (pivot) or m (slides); 0 for a hold.
+        tolerance: the step is done when the estimated error is below this (rad or m).
+        timeout: the step gives up after this long, s (a hold lasts exactly this long).
+    """
+
+    kind: Kind
+    delta: float = 0.0
+    tolerance: float = 0.0
+    timeout: float = DEFAULT_TIMEOUT
+
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS:
+            raise ValueError(f"unknown step kind {self.kind!r}; expected one of: {', '.join(KINDS)}")
+        for name in ("delta", "tolerance", "timeout"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | float) or not np.isfinite(value):
+                raise ValueError(f"step {name} must be a finite number, got {value!r}")
+        if self.kind != "hold" and self.delta == 0.0:
+            raise ValueError(f"a {self.kind} step needs a non-zero increment")
+        if self.kind != "hold" and self.tolerance <= 0.0:
+            raise ValueError(f"step tolerance must be positive, got {self.tolerance!r}")
+        if self.timeout <= 0.0:
+            raise ValueError(f"step timeout must be positive, got {self.timeout!r}")
+
+    @property
+    def motion(self) -> Motion:
+        """The commanded motion of :mod:`ccopt.modes`."""
+        if self.kind == "pivot":
+            return Motion.PIVOT
+        if self.kind == "slide_hand":
+            return modes.slide_hand(self.delta)
+        if self.kind == "slide_ground":
+            return modes.slide_ground(self.delta)
+        return Motion.HOLD
+
+    @property
+    def coordinate(self) -> int | None:
+        """Index into ``(θ_o, s_h, s_g)`` of the coordinate this step changes (None for a hold)."""
+        return COORDINATE.get(self.kind)
+
+
+def pivot(degrees: float, timeout: float = DEFAULT_TIMEOUT) -> Step:
+    return Step("pivot", np.deg2rad(degrees), DEFAULT_TOLERANCE["pivot"], timeout)
+
+
+def slide_hand(millimetres: float, timeout: float = DEFAULT_TIMEOUT) -> Step:
+    return Step("slide_hand", millimetres * 1e-3, DEFAULT_TOLERANCE["slide_hand"], timeout)
+
+
+def slide_ground(millimetres: float, timeout: float = DEFAULT_TIMEOUT) -> Step:
+    return Step("slide_ground", millimetres * 1e-3, DEFAULT_TOLERANCE["slide_ground"], timeout)
+
+
+def hold(seconds: float) -> Step:
+    return Step("hold", 0.0, 0.0, seconds)
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """A named sequence of steps."""
+
+    name: str
+    steps: tuple[Step, ...]
+
+    def __post_init__(self) -> None:
+        if not self.steps:
+            raise ValueError(f"schedule {self.name!r} has no steps")
+
+    def to_dict(self) -> dict[str, object]:
+        """The file form (degrees, millimetres), e.g. for ``meta.json``."""
+        return {"name": self.name, "steps": [_step_to_dict(step) for step in self.steps]}
+
+
+def _paper() -> Schedule:
+    angle = np.rad2deg(PIVOT_STEP)
+    slide = SLIDE_STEP * 1e3
+    exploration = [hold(0.5), slide_hand(slide), slide_hand(-slide), pivot(angle), pivot(-angle)]
+    manipulation = [
+        pivot(angle),
+        pivot(angle),
+        slide_hand(slide),
+        slide_ground(slide),
+        pivot(-angle),
+        slide_hand(-slide),
+        pivot(-angle),
+        pivot(-angle),
+        slide_ground(slide),
+        slide_hand(slide),
+        pivot(angle),
+        slide_ground(-slide),
+        slide_hand(-slide),
+        hold(0.5),
+    ]
+    return Schedule("paper", tuple(exploration + manipulation))
+
+
+def _smoke() -> Schedule:
+    return Schedule(
+        "smoke", (hold(0.3), slide_hand(8.0), pivot(7.2), pivot(-7.2), slide_ground(8.0), hold(0.3))
+    )
+
+
+BUILTIN = {"paper": _paper, "smoke": _smoke}
+
+
+def load_schedule(name_or_path: str | Path) -> Schedule:
+    """A built-in schedule by name, or one read from a ``.json``/``.yaml``/``.yml`` file.
+
+    Raises ``ValueError`` naming the problem: unknown name, missing or unreadable file, malformed
+    content, an unknown key, a bad value.
+    """
+    text = str(name_or_path)
+    if text in BUILTIN:
+        return BUILTIN[text]()
+    path = Path(text)
+    if path.suffix.lower() not in (".json", ".yaml", ".yml"):
+        raise ValueError(
+            f"unknown schedule {text!r}: not a built-in ({', '.join(BUILTIN)}) nor a .json/.yaml file"
+        )
+    try:
+        raw = path.read_text()
+    except OSError as error:
+        raise ValueError(f"cannot read schedule file {text!r}: {error.strerror}") from None
+    try:
+        content = json.loads(raw) if path.suffix.lower() == ".json" else yaml.safe_load(raw)
+    except (json.JSONDecodeError, yaml.YAMLError) as error:
+        raise ValueError(f"schedule file {text!r} is malformed: {str(error).splitlines()[0]}") from None
+    return schedule_from_dict(content, default_name=path.stem)
+
+
+def schedule_from_dict(content: object, default_name: str = "custom") -> Schedule:
+    """A schedule from its file form (degrees, millimetres, seconds)."""
+    if not isinstance(content, dict) or not isinstance(content.get("steps"), list):
+        raise ValueError("a schedule must be a mapping with a list under 'steps'")
+    unknown = set(content) - {"name", "steps"}
+    if unknown:
+        raise ValueError(f"unknown schedule key(s): {', '.join(sorted(unknown))}")
+    steps = tuple(_step_from_dict(index, entry) for index, entry in enumerate(content["steps"]))
+    return Schedule(str(content.get("name", default_name)), steps)
+
+
+_FIELDS = {
+    "pivot": ("delta_deg", "tolerance_deg", np.deg2rad),
+    "slide_hand": ("delta_mm", "tolerance_mm", lambda v: v * 1e-3),
+    "slide_ground": ("delta_mm", "tolerance_mm", lambda v: v * 1e-3),
+}
+
+
+def _step_from_dict(index: int, entry: object) -> Step:
+    where = f"step {index + 1}"
+    if not isinstance(entry, dict) or "motion" not in entry:
+        raise ValueError(f"{where}: expected a mapping with a 'motion' key, got {entry!r}")
+    kind = entry["motion"]
+    if kind not in KINDS:
+        raise ValueError(f"{where}: unknown motion {kind!r}; expected one of: {', '.join(KINDS)}")
+    try:
+        if kind == "hold":
+            _only(entry, {"motion", "duration_s"}, where)
+            return hold(_number(entry.get("duration_s", 1.0), f"{where} duration_s"))
+        delta_key, tolerance_key, to_si = _FIELDS[kind]
+        _only(entry, {"motion", delta_key, tolerance_key, "timeout_s"}, where)
+        if delta_key not in entry:
+            raise ValueError(f"{where}: a {kind} step needs {delta_key!r}")
+        delta = float(to_si(_number(entry[delta_key], f"{where} {delta_key}")))
+        tolerance = entry.get(tolerance_key)
+        tolerance_si = (
+            DEFAULT_TOLERANCE[kind]
+            if tolerance is None
+            else float(to_si(_number(tolerance, f"{where} {tolerance_key}")))
+        )
+        timeout = _number(entry.get("timeout_s", DEFAULT_TIMEOUT), f"{where} timeout_s")
+        return Step(kind, delta, tolerance_si, timeout)
+    except ValueError as error:
+        message = str(error)
+        raise ValueError(message if message.startswith(where) else f"{where}: {message}") from None
+
+
+def _only(entry: dict, allowed: set[str], where: str) -> None:
+    unknown = set(entry) - allowed
+    if unknown:
+        raise ValueError(f"{where}: unknown key(s) {', '.join(sorted(unknown))}")
+
+
+def _number(value: object, name: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float) or not np.isfinite(value):
+        raise ValueError(f"{name} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def _step_to_dict(step: Step) -> dict[str, object]:
+    if step.kind == "hold":
+        return {"motion": "hold", "duration_s": step.timeout}
+    if step.kind == "pivot":
+        return {
+            "motion": "pivot",
+            "delta_deg": float(np.rad2deg(step.delta)),
+            "tolerance_deg": float(np.rad2deg(step.tolerance)),
+            "timeout_s": step.timeout,
+        }
+    return {
+        "motion": step.kind,
+        "delta_mm": step.delta * 1e3,
+        "tolerance_mm": step.tolerance * 1e3,
+        "timeout_s": step.timeout,
+    }

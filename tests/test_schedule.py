@@ -1,0 +1,66 @@
+"""Schedules: built-ins, files in degrees/millimetres, and clear errors."""
+
+import json
+
+import numpy as np
+import pytest
+
+from ccopt import schedule
+from ccopt.modes import Motion
+
+
+def test_paper_schedule_explores_then_manipulates():
+    paper = schedule.load_schedule("paper")
+    kinds = [step.kind for step in paper.steps]
+    assert kinds[1:5] == ["slide_hand", "slide_hand", "pivot", "pivot"]
+    assert {s.motion for s in paper.steps if s.kind == "slide_hand"} == {
+        Motion.SLIDE_HAND_POS,
+        Motion.SLIDE_HAND_NEG,
+    }
+    pivots = [abs(s.delta) for s in paper.steps if s.kind == "pivot"]
+    assert np.allclose(pivots, np.deg2rad(7.2))
+    assert all(abs(s.delta) == pytest.approx(0.010) for s in paper.steps if s.kind.startswith("slide"))
+
+
+def test_file_round_trip_in_degrees_and_millimetres(tmp_path):
+    original = schedule.load_schedule("smoke")
+    path = tmp_path / "s.json"
+    path.write_text(json.dumps(original.to_dict()))
+    loaded = schedule.load_schedule(path)
+    assert loaded == schedule.Schedule("smoke", original.steps)
+
+
+def test_yaml_file(tmp_path):
+    path = tmp_path / "mine.yaml"
+    path.write_text("steps:\n  - {motion: pivot, delta_deg: -5}\n  - {motion: slide_ground, delta_mm: 3}\n")
+    loaded = schedule.load_schedule(path)
+    assert loaded.name == "mine"
+    assert loaded.steps[0].delta == pytest.approx(np.deg2rad(-5))
+    assert loaded.steps[1].motion is Motion.SLIDE_GROUND_POS
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("steps: [{motion: twirl}]", "unknown motion 'twirl'"),
+        ("steps: [{motion: pivot}]", "needs 'delta_deg'"),
+        ("steps: [{motion: pivot, delta_deg: 0}]", "non-zero"),
+        ("steps: [{motion: pivot, delta_deg: 5, speed: 2}]", "unknown key"),
+        ("steps: [{motion: slide_hand, delta_mm: abc}]", "finite number"),
+        ("steps: []", "no steps"),
+        ("steps: [{motion: pivot, delta_deg: [", "malformed"),
+        ("- 1\n- 2", "mapping"),
+    ],
+)
+def test_malformed_files_name_the_problem(tmp_path, text, message):
+    path = tmp_path / "bad.yaml"
+    path.write_text(text)
+    with pytest.raises(ValueError, match=message):
+        schedule.load_schedule(path)
+
+
+def test_unknown_names_and_missing_files():
+    with pytest.raises(ValueError, match="not a built-in"):
+        schedule.load_schedule("fancy")
+    with pytest.raises(ValueError, match="cannot read"):
+        schedule.load_schedule("/no/such/file.yaml")
