@@ -67,6 +67,11 @@ def _jsonable(value: object) -> object:
     raise TypeError(f"cannot store {type(value).__name__} in JSON")
 
 
+def write_summary(folder: str | Path, summary: dict[str, object]) -> None:
+    """Write (or replace) a run folder's ``summary.json``."""
+    _write_json(Path(folder) / "summary.json", summary)
+
+
 class RecordWriter:
     """Appends samples (dicts of scalars/arrays with fixed keys and shapes) to a run folder."""
 
@@ -115,7 +120,7 @@ class RecordWriter:
             for chunk in (self.folder / CHUNKS).glob("chunk_*.npz"):
                 chunk.unlink()
         if summary is not None:
-            _write_json(self.folder / "summary.json", summary)
+            write_summary(self.folder, summary)
         self.meta["status"] = status
         self.meta["samples"] = self._count
         _write_json(self.folder / "meta.json", self.meta)
