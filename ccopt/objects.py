@@ -139,14 +139,15 @@ class PlanarObject:
 
     def face_normal(self, face: int) -> np.ndarray:
         """Outward unit normal of ``face`` in the body frame."""
-        return geometry.face_normal(self.vertices, self._face_index(face))
+        return geometry.face_normal(self.vertices, self.face_index(face))
 
     def face_length(self, face: int) -> float:
         """Length of ``face``, m."""
-        start, end = self.faces[self._face_index(face)]
+        start, end = self.faces[self.face_index(face)]
         return float(np.linalg.norm(end - start))
 
-    def _face_index(self, face: int) -> int:
+    def face_index(self, face: int) -> int:
+        """``face`` validated against this object (raises ``TypeError``/``ValueError``)."""
         if isinstance(face, bool) or not isinstance(face, int | np.integer):
             raise TypeError(f"face must be an integer, got {type(face).__name__} {face!r}")
         if not 0 <= face < self.n_faces:

@@ -35,7 +35,7 @@ def _numbers(values: Iterable[float]) -> str:
 
 
 def option_xml(params: PlantParams) -> str:
-    """``<compiler>`` and ``<option>`` with the DESIGN.md §6 contact settings."""
+    """``<compiler>`` and ``<option>``: DESIGN.md §6 settings (``impratio`` from ``params``)."""
     return (
         '<compiler angle="radian" autolimits="true"/>'
         f'<option timestep="{params.timestep:.12g}" integrator="implicitfast" solver="Newton" '
@@ -73,7 +73,7 @@ def object_body_xml(obj: PlanarObject) -> str:
     The out-of-plane inertia (MuJoCo y axis) is the lamina's; the two in-plane ones only need to be
     valid because the planar joints never excite them.
     """
-    in_plane = 0.5 * obj.inertia
+    in_plane = 0.6 * obj.inertia
     inertia = _numbers((in_plane, obj.inertia, in_plane))
     return (
         f'<body name="{OBJECT_BODY}">'
@@ -94,7 +94,8 @@ def ground_xml() -> str:
 
 
 def pair_xml(geom1: str, geom2: str, mu: float, params: PlantParams) -> str:
-    """One contact pair: Coulomb friction ``mu``, ``condim = 3``, ``solref = (timeconst, 1)``.
+    """One contact pair: Coulomb friction ``mu``, ``condim = 3``, ``solref = (timeconst, 1)``,
+    ``solimp = (d_min, d_max, width, 0.5, 2)``.
 
     ``mu`` below MuJoCo's minimum friction (1e-5) is raised to it.
     """
@@ -102,7 +103,7 @@ def pair_xml(geom1: str, geom2: str, mu: float, params: PlantParams) -> str:
     return (
         f'<pair geom1="{geom1}" geom2="{geom2}" condim="3" '
         f'friction="{mu:.12g} {mu:.12g} 0.001 0.0001 0.0001" '
-        f'solref="{params.contact_timeconst:.12g} 1"/>'
+        f'solref="{params.contact_timeconst:.12g} 1" solimp="{_numbers(params.solimp)} 0.5 2"/>'
     )
 
 

@@ -5,9 +5,12 @@ The estimator and controller never read this module's output. Conventions are th
 every plant reports truth the same way.
 
 Thresholds:
-    * a contact slides when its sliding speed exceeds :data:`SLIDE_SPEED` (1 mm/s): the hand when
-      ``|ṡ_h|`` does, the ground when ``|ṡ_g|`` (the horizontal speed of the object's lowest
-      vertex) does;
+    * a contact slides when its sliding speed exceeds :data:`SLIDE_SPEED` (1 mm/s). At the hand
+      the sliding speed is the tangential (``e_t``) velocity of the object's material point at the
+      hand-face centre relative to the hand; it equals ``ṡ_h`` while the hand is flush and, unlike
+      ``ṡ_h``, ignores the small relative rotations of a compliant flush contact (the tangential
+      relative velocity is the same at every point of the face line). At the ground it is
+      ``ṡ_g``, the horizontal velocity of the object's material point at its lowest vertex;
     * the hand pivots when ``|θ_o − θ_h|`` exceeds :data:`PIVOT_ANGLE` (0.5°).
 """
 
@@ -50,8 +53,9 @@ class Truth:
         ground_mode: −1 / 0 / +1 for sliding with ``ṡ_g < 0`` / sticking / ``ṡ_g > 0``.
         in_contact_hand: the hand touches the object.
         in_contact_ground: the object touches the ground.
-        s_h_rate: ``ṡ_h``, m/s.
-        s_g_rate: ``ṡ_g``, m/s.
+        hand_slip_rate: object-relative-to-hand sliding velocity along ``e_t`` at the hand, m/s
+            (``ṡ_h`` while flush).
+        ground_slip_rate: ``ṡ_g``, m/s.
     """
 
     time: float
@@ -66,8 +70,8 @@ class Truth:
     ground_mode: int
     in_contact_hand: bool
     in_contact_ground: bool
-    s_h_rate: float
-    s_g_rate: float
+    hand_slip_rate: float
+    ground_slip_rate: float
 
 
 def _mode(rate: float, threshold: float) -> int:
@@ -107,11 +111,7 @@ def compute_truth(
     in_contact_ground: bool,
 ) -> Truth:
     """Truth from the object pose/velocity (centroid, world ``(x, y, φ)``) and the hand pose/velocity
-    (contact-face centre, world ``(x, y, θ)``); units m, rad, m/s, rad/s.
-
-    ``ṡ_h = (v(r_o) − v_h)·e_t − ω_h d`` is the exact derivative of ``s_h`` with ``r_o`` a material
-    point of the object; ``ṡ_g`` is the x-velocity of that point.
-    """
+    (contact-face centre, world ``(x, y, θ)``); units m, rad, m/s, rad/s."""
     object_pose = np.asarray(object_pose, dtype=float)
     hand_pose = np.asarray(hand_pose, dtype=float)
     world_vertices = geometry.transform_points(obj.vertices, object_pose)
@@ -120,10 +120,10 @@ def compute_truth(
     theta_h = float(hand_pose[2])
     raw = face_angle(obj, hand_face, float(object_pose[2]))
     theta_o = theta_h + geometry.wrap_angle(raw - theta_h)
-    v_ro = point_velocity(object_pose, object_velocity, r_o)
     hand_velocity = np.asarray(hand_velocity, dtype=float)
-    s_h_rate = float((v_ro - hand_velocity[:2]) @ geometry.hand_tangent(theta_h) - hand_velocity[2] * d)
-    s_g_rate = float(v_ro[0])
+    v_contact = point_velocity(object_pose, object_velocity, hand_pose[:2])
+    hand_slip_rate = float((v_contact - hand_velocity[:2]) @ geometry.hand_tangent(theta_h))
+    ground_slip_rate = float(point_velocity(object_pose, object_velocity, r_o)[0])
     delta = theta_o - theta_h
     return Truth(
         time=float(time),
@@ -133,11 +133,11 @@ def compute_truth(
         d=d,
         r_o=r_o,
         object_pose=object_pose.copy(),
-        hand_mode=_mode(s_h_rate, SLIDE_SPEED),
+        hand_mode=_mode(hand_slip_rate, SLIDE_SPEED),
         hand_geometry=_mode(delta, PIVOT_ANGLE),
-        ground_mode=_mode(s_g_rate, SLIDE_SPEED),
+        ground_mode=_mode(ground_slip_rate, SLIDE_SPEED),
         in_contact_hand=bool(in_contact_hand),
         in_contact_ground=bool(in_contact_ground),
-        s_h_rate=s_h_rate,
-        s_g_rate=s_g_rate,
+        hand_slip_rate=hand_slip_rate,
+        ground_slip_rate=ground_slip_rate,
     )

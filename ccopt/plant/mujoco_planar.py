@@ -1,0 +1,312 @@
+"""Planar MuJoCo plant: a flat impedance-controlled hand presses an object against the ground.
+
+The hand is a box whose contact face (``2 l_h`` long) is centred on the hand body's origin, with
+three planar joints so that the hand's ``qpos`` is its pose ``(x_h, y_h, θ_h)`` (DESIGN.md §3).
+Position actuators (``kp = K``) and velocity actuators (``kv = D``, fed the target velocity) on
+those joints make the planar impedance ``w = K (x_tar − x_h) + D (v_tar − v_h)`` at the face
+centre, in world axes; gravity is compensated.
+"""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ccopt import geometry
+from ccopt.objects import PlanarObject
+from ccopt.plant import scene
+from ccopt.plant.base import PlantParams, StartConfig
+from ccopt.plant.truth import Truth, compute_truth, lowest_vertex
+
+HAND_BODY = "hand"
+HAND_GEOM = "hand"
+HAND_JOINTS = ("hand_x", "hand_z", "hand_theta")
+
+CONTACT_FORCE_MIN = 1e-3
+"""Normal force (N) above which a pair counts as in contact."""
+
+
+def hand_body_xml(params: PlantParams) -> str:
+    """Gravity-compensated hand body: planar joints at the contact-face centre, box behind the face."""
+    half_t = 0.5 * params.hand_thickness
+    half_w = 0.75 * params.depth
+    length = 2.0 * params.l_h
+    m = params.hand_mass
+    inertia = (
+        m * (4.0 * half_w**2 + 4.0 * half_t**2) / 12.0,
+        m * (length**2 + 4.0 * half_t**2) / 12.0,
+        m * (length**2 + 4.0 * half_w**2) / 12.0,
+    )
+    return (
+        f'<body name="{HAND_BODY}" gravcomp="1">'
+        f"{scene.planar_joints_xml('hand')}"
+        f'<inertial pos="0 0 {half_t:.12g}" mass="{m:.12g}" '
+        f'diaginertia="{" ".join(f"{i:.12g}" for i in inertia)}"/>'
+        f'<geom name="{HAND_GEOM}" type="box" pos="0 0 {half_t:.12g}" '
+        f'size="{params.l_h:.12g} {half_w:.12g} {half_t:.12g}" contype="0" conaffinity="0" '
+        'rgba="0.2 0.4 0.8 1"/>'
+        "</body>"
+    )
+
+
+def impedance_actuators_xml(params: PlantParams) -> str:
+    """Position (``kp = K``) then velocity (``kv = D``) actuators on the three hand joints."""
+    position = "".join(
+        f'<position name="{joint}_kp" joint="{joint}" kp="{k:.12g}"/>'
+        for joint, k in zip(HAND_JOINTS, params.K, strict=True)
+    )
+    velocity = "".join(
+        f'<velocity name="{joint}_kv" joint="{joint}" kv="{d:.12g}"/>'
+        for joint, d in zip(HAND_JOINTS, params.D, strict=True)
+    )
+    return f"<actuator>{position}{velocity}</actuator>"
+
+
+def planar_model_xml(obj: PlanarObject, params: PlantParams) -> str:
+    """The complete MJCF of the planar plant."""
+    return (
+        f'<mujoco model="ccopt_planar_{obj.name}">'
+        f"{scene.option_xml(params)}"
+        f"<asset>{scene.object_asset_xml(obj, params)}</asset>"
+        f"<worldbody>{scene.ground_xml()}{scene.object_body_xml(obj)}{hand_body_xml(params)}</worldbody>"
+        f"{scene.contact_pairs_xml(obj, params, HAND_GEOM)}"
+        f"{impedance_actuators_xml(params)}"
+        "</mujoco>"
+    )
+
+
+def start_poses(
+    obj: PlanarObject, start: StartConfig, params: PlantParams
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Object pose, hand pose and impedance target of a start configuration, world ``(x, y, θ)``.
+
+    The object is turned so that the outward normal of ``start.hand_face`` is ``−e_n(θ_o)``, its
+    lowest vertex touches the ground at ``x_o``; the hand lies flush on that face at ``s_h``; the
+    target is the hand pose pushed ``K⁻¹ f_n e_n`` into the object.
+
+    Raises:
+        ValueError: the face does not exist, the hand centre is off the face, or the hand would
+            cut the ground.
+    """
+    face = obj.face_index(start.hand_face)
+    normal = obj.face_normal(face)
+    angle = start.theta_o + 0.5 * math.pi - math.atan2(normal[1], normal[0])
+    rotated = geometry.transform_points(obj.vertices, (0.0, 0.0, angle))
+    lowest = rotated[lowest_vertex(rotated)]
+    centroid = np.array([start.x_o, 0.0]) - lowest
+    object_pose = np.array([centroid[0], centroid[1], angle])
+
+    r_o = np.array([start.x_o, 0.0])
+    e_n = geometry.hand_normal(start.theta_o)
+    e_t = geometry.hand_tangent(start.theta_o)
+    face_start, face_end = rotated[face] + centroid, rotated[(face + 1) % obj.n_faces] + centroid
+    d = float((r_o - face_start) @ e_n)
+    hand_pose = geometry.hand_pose_from_contact(start.theta_o, start.s_h, d, r_o)
+
+    along = sorted(float((p - hand_pose[:2]) @ e_t) for p in (face_start, face_end))
+    if not along[0] - 1e-9 <= 0.0 <= along[1] + 1e-9:
+        raise ValueError(
+            f"s_h = {start.s_h} m puts the hand centre off face {face} of {obj.name} "
+            f"(admissible s_h: [{start.s_h - along[1]:.4f}, {start.s_h - along[0]:.4f}] m)"
+        )
+    corners = [
+        hand_pose[:2] + a * params.l_h * e_t - b * params.hand_thickness * e_n
+        for a in (-1.0, 1.0)
+        for b in (0.0, 1.0)
+    ]
+    if min(c[1] for c in corners) < 0.0:
+        raise ValueError(
+            f"the hand would cut the ground at theta_o = {start.theta_o} rad, s_h = {start.s_h} m "
+            f"on face {face} of {obj.name}"
+        )
+    offset = start.normal_force * e_n / np.asarray(params.K[:2])
+    target = hand_pose + np.array([offset[0], offset[1], 0.0])
+    return object_pose, hand_pose, target
+
+
+def _as_vector3(name: str, value: ArrayLike) -> np.ndarray:
+    vector = np.asarray(value, dtype=float)
+    if vector.shape != (3,) or not np.all(np.isfinite(vector)):
+        raise ValueError(f"{name} must be 3 finite numbers (x, y, θ), got {value!r}")
+    return vector
+
+
+class PlanarPlant:
+    """Planar hand–object–ground simulation (implements :class:`~ccopt.plant.base.Plant`).
+
+    Args:
+        obj: the object.
+        params: plant parameters.
+        start: start configuration; the plant settles there for ``start.settle_time`` (pressing
+            with ``start.normal_force``) and then resets its clock to 0.
+    """
+
+    def __init__(
+        self,
+        obj: PlanarObject,
+        params: PlantParams | None = None,
+        start: StartConfig | None = None,
+    ) -> None:
+        self.obj = obj
+        self.params = params or PlantParams()
+        self.start = start or StartConfig()
+        object_pose, hand_pose, target = start_poses(obj, self.start, self.params)
+        self._model = mujoco.MjModel.from_xml_string(planar_model_xml(obj, self.params))
+        self._data = mujoco.MjData(self._model)
+        m = self._model
+        self._hand_qpos = np.array([m.jnt_qposadr[m.joint(j).id] for j in HAND_JOINTS])
+        self._hand_dof = np.array([m.jnt_dofadr[m.joint(j).id] for j in HAND_JOINTS])
+        self._obj_qpos = np.array([m.jnt_qposadr[m.joint(j).id] for j in scene.OBJECT_JOINTS])
+        self._obj_dof = np.array([m.jnt_dofadr[m.joint(j).id] for j in scene.OBJECT_JOINTS])
+        self._hand_geom = m.geom(HAND_GEOM).id
+        self._object_geom = m.geom(scene.OBJECT_GEOM).id
+        self._ground_geom = m.geom(scene.GROUND_GEOM).id
+        self._object_body = m.body(scene.OBJECT_BODY).id
+        self._push_end: float | None = None
+        self._force = np.zeros(6)
+
+        self._data.qpos[self._obj_qpos] = object_pose
+        self._data.qpos[self._hand_qpos] = hand_pose
+        mujoco.mj_forward(m, self._data)
+        self._settle(target)
+
+    def _settle(self, target: np.ndarray) -> None:
+        """Press towards ``target`` for the settle time, correcting the target once halfway so that
+        the contacts' compliance does not eat into the normal force; then reset the clock."""
+        half = round(0.5 * self.start.settle_time / self.timestep)
+        self.set_target(target)
+        self.step(half)
+        if half > 0:
+            error = self.start.normal_force - self.hand_wrench()[0]
+            e_n = geometry.hand_normal(self.start.theta_o)
+            self.set_target(target + np.array([*(error * e_n / np.asarray(self.params.K[:2])), 0.0]))
+            self.step(half)
+        self._data.time = 0.0
+
+    # --- simulator access (read only: do not mutate) ---------------------------------------------
+
+    @property
+    def model(self) -> mujoco.MjModel:
+        """The MuJoCo model (for tests and benchmarks; do not mutate)."""
+        return self._model
+
+    @property
+    def data(self) -> mujoco.MjData:
+        """The MuJoCo data (for tests and benchmarks; do not mutate)."""
+        return self._data
+
+    @property
+    def time(self) -> float:
+        """Simulated time since the end of settling, s."""
+        return float(self._data.time)
+
+    @property
+    def timestep(self) -> float:
+        """Simulation step, s."""
+        return float(self._model.opt.timestep)
+
+    # --- commands --------------------------------------------------------------------------------
+
+    def set_target(self, pose: ArrayLike, velocity: ArrayLike | None = None) -> None:
+        """Hand impedance target, world ``(x, y, θ)`` (m, rad), and its velocity (m/s, rad/s)."""
+        self._data.ctrl[:3] = _as_vector3("target pose", pose)
+        self._data.ctrl[3:] = 0.0 if velocity is None else _as_vector3("target velocity", velocity)
+
+    def target(self) -> np.ndarray:
+        """Current impedance target, world ``(x, y, θ)``."""
+        return self._data.ctrl[:3].copy()
+
+    def push_object(self, force: ArrayLike, duration: float) -> None:
+        """Apply world force ``(f_x, f_y)`` (N) at the object's centroid for ``duration`` s from now."""
+        push = np.asarray(force, dtype=float)
+        if push.shape != (2,) or not np.all(np.isfinite(push)):
+            raise ValueError(f"force must be 2 finite numbers (f_x, f_y), got {force!r}")
+        if not math.isfinite(duration) or duration < 0.0:
+            raise ValueError(f"duration must be a non-negative number of s, got {duration!r}")
+        self._data.xfrc_applied[self._object_body, [0, 2]] = push
+        self._push_end = self.time + duration
+
+    def step(self, n_steps: int = 1) -> None:
+        """Advance by ``n_steps`` timesteps (ending any push when its duration is over)."""
+        if isinstance(n_steps, bool) or not isinstance(n_steps, int | np.integer) or n_steps < 0:
+            raise ValueError(f"n_steps must be a non-negative integer, got {n_steps!r}")
+        remaining = int(n_steps)
+        while remaining > 0:
+            if self._push_end is None:
+                mujoco.mj_step(self._model, self._data, remaining)
+                return
+            left = math.ceil((self._push_end - self.time) / self.timestep - 1e-9)
+            chunk = min(remaining, max(left, 0))
+            if chunk > 0:
+                mujoco.mj_step(self._model, self._data, chunk)
+                remaining -= chunk
+            if self.time >= self._push_end - 1e-9:
+                self._data.xfrc_applied[self._object_body] = 0.0
+                self._push_end = None
+
+    # --- state -----------------------------------------------------------------------------------
+
+    def hand_pose(self) -> np.ndarray:
+        """True world ``(x_h, y_h, θ_h)`` of the hand contact-face centre."""
+        return self._data.qpos[self._hand_qpos].copy()
+
+    def hand_velocity(self) -> np.ndarray:
+        """True world ``(ẋ_h, ẏ_h, θ̇_h)``."""
+        return self._data.qvel[self._hand_dof].copy()
+
+    def object_pose(self) -> np.ndarray:
+        """True world ``(x, y, φ)`` of the object's centroid frame."""
+        return self._data.qpos[self._obj_qpos].copy()
+
+    def object_velocity(self) -> np.ndarray:
+        """True world ``(ẋ, ẏ, φ̇)`` of the object's centroid frame."""
+        return self._data.qvel[self._obj_dof].copy()
+
+    def _pair_wrench(self, geom_a: int, geom_b: int, about: np.ndarray) -> np.ndarray:
+        """World planar wrench ``(f_x, f_y, τ)`` that ``geom_a`` exerts on ``geom_b``, τ about ``about``."""
+        total = np.zeros(3)
+        contact = self._data.contact
+        for i in range(self._data.ncon):
+            g1, g2 = contact.geom[i]
+            if {g1, g2} != {geom_a, geom_b}:
+                continue
+            mujoco.mj_contactForce(self._model, self._data, i, self._force)
+            force = self._force[:3] @ contact.frame[i].reshape(3, 3)
+            if g1 != geom_a:
+                force = -force
+            fx, fy = force[0], force[2]
+            px, py = contact.pos[i][[0, 2]] - about
+            total += (fx, fy, px * fy - py * fx)
+        return total
+
+    def hand_wrench_world(self) -> np.ndarray:
+        """True world wrench ``(f_x, f_y, τ)`` of the hand on the object, τ about the face centre."""
+        return self._pair_wrench(self._hand_geom, self._object_geom, self.hand_pose()[:2])
+
+    def hand_wrench(self) -> np.ndarray:
+        """True hand-frame wrench ``(f_n, f_t, τ)`` of the hand on the object, τ about the face centre."""
+        pose = self.hand_pose()
+        world = self._pair_wrench(self._hand_geom, self._object_geom, pose[:2])
+        return geometry.wrench_world_to_hand(pose[2], world)
+
+    def ground_wrench(self) -> np.ndarray:
+        """True world wrench ``(f_x, f_y, τ)`` of the ground on the object, τ about the world origin."""
+        return self._pair_wrench(self._ground_geom, self._object_geom, np.zeros(2))
+
+    def truth(self) -> Truth:
+        """Ground truth of the contact configuration (see :mod:`ccopt.plant.truth`)."""
+        hand_force = geometry.wrench_world_to_hand(self.hand_pose()[2], self.hand_wrench_world())[0]
+        return compute_truth(
+            time=self.time,
+            obj=self.obj,
+            hand_face=self.start.hand_face,
+            object_pose=self.object_pose(),
+            object_velocity=self.object_velocity(),
+            hand_pose=self.hand_pose(),
+            hand_velocity=self.hand_velocity(),
+            in_contact_hand=hand_force > CONTACT_FORCE_MIN,
+            in_contact_ground=self.ground_wrench()[1] > CONTACT_FORCE_MIN,
+        )
