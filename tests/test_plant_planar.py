@@ -16,6 +16,7 @@ import pytest
 
 from ccopt import geometry
 from ccopt.objects import PAPER_OBJECT_NAMES, PlanarObject, make_object
+from ccopt.plant import scene
 from ccopt.plant.base import Plant, PlantParams, StartConfig
 from ccopt.plant.mujoco_planar import PlanarPlant
 from ccopt.plant.truth import lowest_vertex
@@ -247,6 +248,10 @@ def test_hand_wrench_agrees_with_mujoco_contact_forces() -> None:
             world = force[:3] @ data.contact.frame[i].reshape(3, 3)
             total += (world[0], world[2]) if data.contact.geom[i][0] == hand else (-world[0], -world[2])
     np.testing.assert_allclose(plant.hand_wrench_world()[:2], total)
+    pair = scene.pair_wrench(data, hand, obj, plant.hand_pose()[:2])
+    np.testing.assert_allclose(plant.hand_wrench_world(), pair, atol=1e-9)
+    ground = scene.pair_wrench(data, model.geom("ground").id, obj, plant.object_pose()[:2])
+    np.testing.assert_allclose(plant.ground_wrench(), ground, atol=1e-9)
     assert plant.hand_wrench()[0] == pytest.approx(6.0, rel=0.02)
 
 

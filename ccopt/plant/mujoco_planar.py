@@ -129,7 +129,7 @@ def start_poses(
 
 def _as_vector3(name: str, value: ArrayLike) -> np.ndarray:
     vector = np.asarray(value, dtype=float)
-    if vector.shape != (3,) or not np.all(np.isfinite(vector)):
+    if vector.shape != (3,) or not math.isfinite(vector.sum()):
         raise ValueError(f"{name} must be 3 finite numbers (x, y, θ), got {value!r}")
     return vector
 
@@ -166,7 +166,10 @@ class PlanarPlant:
         self._ground_geom = m.geom(scene.GROUND_GEOM).id
         self._object_body = m.body(scene.OBJECT_BODY).id
         self._push_end: float | None = None
-        self._force = np.zeros(6)
+        self._ctrl = self._data.ctrl
+        self._qpos = self._data.qpos
+        self._qvel = self._data.qvel
+        self._qfrc_constraint = self._data.qfrc_constraint
 
         self._data.qpos[self._obj_qpos] = object_pose
         self._data.qpos[self._hand_qpos] = hand_pose
@@ -212,12 +215,12 @@ class PlanarPlant:
 
     def set_target(self, pose: ArrayLike, velocity: ArrayLike | None = None) -> None:
         """Hand impedance target, world ``(x, y, θ)`` (m, rad), and its velocity (m/s, rad/s)."""
-        self._data.ctrl[:3] = _as_vector3("target pose", pose)
-        self._data.ctrl[3:] = 0.0 if velocity is None else _as_vector3("target velocity", velocity)
+        self._ctrl[:3] = _as_vector3("target pose", pose)
+        self._ctrl[3:] = 0.0 if velocity is None else _as_vector3("target velocity", velocity)
 
     def target(self) -> np.ndarray:
         """Current impedance target, world ``(x, y, θ)``."""
-        return self._data.ctrl[:3].copy()
+        return self._ctrl[:3].copy()
 
     def push_object(self, force: ArrayLike, duration: float) -> None:
         """Apply world force ``(f_x, f_y)`` (N) at the object's centroid for ``duration`` s from now."""
@@ -251,50 +254,45 @@ class PlanarPlant:
 
     def hand_pose(self) -> np.ndarray:
         """True world ``(x_h, y_h, θ_h)`` of the hand contact-face centre."""
-        return self._data.qpos[self._hand_qpos].copy()
+        return self._qpos[self._hand_qpos]
 
     def hand_velocity(self) -> np.ndarray:
         """True world ``(ẋ_h, ẏ_h, θ̇_h)``."""
-        return self._data.qvel[self._hand_dof].copy()
+        return self._qvel[self._hand_dof]
 
     def object_pose(self) -> np.ndarray:
         """True world ``(x, y, φ)`` of the object's centroid frame."""
-        return self._data.qpos[self._obj_qpos].copy()
+        return self._qpos[self._obj_qpos]
 
     def object_velocity(self) -> np.ndarray:
         """True world ``(ẋ, ẏ, φ̇)`` of the object's centroid frame."""
-        return self._data.qvel[self._obj_dof].copy()
-
-    def _pair_wrench(self, geom_a: int, geom_b: int, about: np.ndarray) -> np.ndarray:
-        """World planar wrench ``(f_x, f_y, τ)`` that ``geom_a`` exerts on ``geom_b``, τ about ``about``."""
-        total = np.zeros(3)
-        contact = self._data.contact
-        for i in range(self._data.ncon):
-            g1, g2 = contact.geom[i]
-            if {g1, g2} != {geom_a, geom_b}:
-                continue
-            mujoco.mj_contactForce(self._model, self._data, i, self._force)
-            force = self._force[:3] @ contact.frame[i].reshape(3, 3)
-            if g1 != geom_a:
-                force = -force
-            fx, fy = force[0], force[2]
-            px, py = contact.pos[i][[0, 2]] - about
-            total += (fx, fy, px * fy - py * fx)
-        return total
+        return self._qvel[self._obj_dof]
 
     def hand_wrench_world(self) -> np.ndarray:
-        """True world wrench ``(f_x, f_y, τ)`` of the hand on the object, τ about the face centre."""
-        return self._pair_wrench(self._hand_geom, self._object_geom, self.hand_pose()[:2])
+        """True world wrench ``(f_x, f_y, τ)`` of the hand on the object, τ about the face centre.
+
+        The hand's only contacts are with the object and its joints are world x, world z and a
+        hinge at the face centre, so this is minus the constraint force on the hand's joints: the
+        sum of the hand–object contact forces (:func:`ccopt.plant.scene.pair_wrench`), in O(1).
+        """
+        return -self._qfrc_constraint[self._hand_dof]
 
     def hand_wrench(self) -> np.ndarray:
         """True hand-frame wrench ``(f_n, f_t, τ)`` of the hand on the object, τ about the face centre."""
-        pose = self.hand_pose()
-        world = self._pair_wrench(self._hand_geom, self._object_geom, pose[:2])
-        return geometry.wrench_world_to_hand(pose[2], world)
+        theta_h = self._qpos[self._hand_qpos[2]]
+        fx, fy, torque = self.hand_wrench_world()
+        # wrench_world_to_hand, written out: it is called every tick and must stay cheap
+        e_n, e_t = geometry.hand_normal(theta_h), geometry.hand_tangent(theta_h)
+        return np.array([fx * e_n[0] + fy * e_n[1], fx * e_t[0] + fy * e_t[1], torque])
 
     def ground_wrench(self) -> np.ndarray:
-        """True world wrench ``(f_x, f_y, τ)`` of the ground on the object, τ about the world origin."""
-        return self._pair_wrench(self._ground_geom, self._object_geom, np.zeros(2))
+        """True world wrench ``(f_x, f_y, τ)`` of the ground on the object, τ about its centroid.
+
+        The object's constraint force less the hand's share (the object touches nothing else).
+        """
+        pose = self.object_pose()
+        hand = geometry.shift_torque(self.hand_wrench_world(), self.hand_pose()[:2], pose[:2])
+        return self._qfrc_constraint[self._obj_dof] - hand
 
     def truth(self) -> Truth:
         """Ground truth of the contact configuration (see :mod:`ccopt.plant.truth`)."""

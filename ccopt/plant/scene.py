@@ -5,6 +5,8 @@ The ccopt plane ``(x, y)`` is MuJoCo's ``(x, z)``; planar hinges use axis ``(0, 
 ``contype = conaffinity = 0``: only the explicit ``<contact><pair>`` elements collide, each with its
 own friction, ``condim = 3`` and ``solref`` (DESIGN.md §6).
 
+:func:`pair_wrench` reads the planar wrench one geom exerts on another from the solved contacts.
+
 A plant assembles a model from these strings, e.g.::
 
     f"<mujoco model='m'>{option_xml(params)}<asset>{object_asset_xml(obj, params)}</asset>"
@@ -16,6 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
+import mujoco
 import numpy as np
 
 from ccopt.objects import PlanarObject
@@ -115,3 +118,34 @@ def contact_pairs_xml(obj: PlanarObject, params: PlantParams, hand_geom: str) ->
         f"{pair_xml(OBJECT_GEOM, GROUND_GEOM, obj.mu_ground, params)}"
         "</contact>"
     )
+
+
+_CONTACT_DIMS = np.arange(3)
+
+
+def pair_wrench(data: mujoco.MjData, geom_a: int, geom_b: int, about: np.ndarray) -> np.ndarray:
+    """Planar world wrench ``(f_x, f_y, τ)`` that geom ``geom_a`` exerts on geom ``geom_b``.
+
+    ``τ`` is about the ccopt-plane point ``about`` (m). Sums the contacts between the two geoms; each
+    contact force is read, like ``mujoco.mj_contactForce`` does for elliptic cones, from
+    ``efc_force`` in the contact frame (normal from ``geom[0]`` to ``geom[1]``). Requires the
+    elliptic cones of :func:`option_xml` and ``condim = 3`` pairs (:func:`pair_xml`).
+    """
+    contact = data.contact
+    if data.ncon == 0:
+        return np.zeros(3)
+    geoms = contact.geom
+    forward = (geoms[:, 0] == geom_a) & (geoms[:, 1] == geom_b)
+    backward = (geoms[:, 0] == geom_b) & (geoms[:, 1] == geom_a)
+    selected = np.flatnonzero(forward | backward)
+    address = contact.efc_address[selected]
+    selected, address = selected[address >= 0], address[address >= 0]
+    if selected.size == 0:
+        return np.zeros(3)
+    local = data.efc_force[address[:, None] + _CONTACT_DIMS]
+    world = np.einsum("ki,kij->kj", local, contact.frame[selected].reshape(-1, 3, 3))
+    world[backward[selected]] *= -1.0
+    fx, fy = world[:, 0], world[:, 2]
+    px = contact.pos[selected, 0] - about[0]
+    py = contact.pos[selected, 2] - about[1]
+    return np.array([fx.sum(), fy.sum(), float(px @ fy - py @ fx)])

@@ -93,17 +93,18 @@ class Sensors:
         self.params = params or SensorParams()
         self._rng = np.random.default_rng(seed)
         p = self.params
-        self._wrench_sigma = np.array([p.sigma_force, p.sigma_force, p.sigma_torque])
-        self._pose_sigma = np.array([p.sigma_position, p.sigma_position, p.sigma_angle])
+        self._sigma = np.array(
+            [p.sigma_position, p.sigma_position, p.sigma_angle, p.sigma_force, p.sigma_force, p.sigma_torque]
+        )
         self.bias = self._rng.standard_normal(3) * np.array([p.bias_force, p.bias_force, p.bias_torque])
         """The constant F/T bias of this run, hand frame ``(f_n, f_t, τ)``."""
 
     def read(self) -> Measurement:
         """Sample the sensors now."""
-        noise = self._rng.standard_normal(6)
-        if self.params.dropout_probability > 0.0 and self._rng.random() < self.params.dropout_probability:
-            nan = np.full(3, np.nan)
-            return Measurement(self.plant.time, nan, nan.copy())
-        pose = self.plant.hand_pose() + noise[:3] * self._pose_sigma
-        wrench = self.plant.hand_wrench() + self.bias + noise[3:] * self._wrench_sigma
+        noise = self._rng.standard_normal(6) * self._sigma
+        dropout = self.params.dropout_probability
+        if dropout > 0.0 and self._rng.random() < dropout:
+            return Measurement(self.plant.time, np.full(3, np.nan), np.full(3, np.nan))
+        pose = self.plant.hand_pose() + noise[:3]
+        wrench = self.plant.hand_wrench() + self.bias + noise[3:]
         return Measurement(self.plant.time, pose, wrench)
