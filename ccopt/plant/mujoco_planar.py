@@ -295,8 +295,8 @@ class PlanarPlant:
         return self._qfrc_constraint[self._obj_dof] - hand
 
     def truth(self) -> Truth:
-        """Ground truth of the contact configuration (see :mod:`ccopt.plant.truth`)."""
-        hand_force = geometry.wrench_world_to_hand(self.hand_pose()[2], self.hand_wrench_world())[0]
+        """Ground truth of the contact configuration (see :mod:`ccopt.plant.truth`); ``θ_o`` is that
+        of the start configuration's hand face."""
         return compute_truth(
             time=self.time,
             obj=self.obj,
@@ -305,6 +305,6 @@ class PlanarPlant:
             object_velocity=self.object_velocity(),
             hand_pose=self.hand_pose(),
             hand_velocity=self.hand_velocity(),
-            in_contact_hand=hand_force > CONTACT_FORCE_MIN,
+            in_contact_hand=self.hand_wrench()[0] > CONTACT_FORCE_MIN,
             in_contact_ground=self.ground_wrench()[1] > CONTACT_FORCE_MIN,
         )
