@@ -22,10 +22,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from ccopt.geometry import Array
+
+
+def _read_only(array: Array) -> Array:
+    array.setflags(write=False)
+    return array
 
 
 @dataclass(frozen=True)
@@ -54,29 +60,28 @@ class HandPlate:
         if not math.isfinite(self.mount_angle):
             raise ValueError(f"HandPlate.mount_angle must be finite, got {self.mount_angle!r}")
 
-    @property
+    @cached_property
     def rotation(self) -> Array:
-        """3×3 rotation of the hand frame in the flange frame (about the flange ``z``)."""
+        """3×3 rotation of the hand frame in the flange frame (about the flange ``z``); read-only."""
         c, s = math.cos(self.mount_angle), math.sin(self.mount_angle)
-        return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        return _read_only(np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]))
 
-    @property
+    @cached_property
     def face_centre(self) -> Array:
-        """Contact face centre (the hand frame origin) in the flange frame (m)."""
-        return np.array([0.0, 0.0, self.thickness])
+        """Contact face centre (the hand frame origin) in the flange frame (m); read-only."""
+        return _read_only(np.array([0.0, 0.0, self.thickness]))
 
-    @property
+    @cached_property
     def centre_of_mass(self) -> Array:
-        """Plate centre of mass in the flange frame (m)."""
-        return np.array([0.0, 0.0, 0.5 * self.thickness])
+        """Plate centre of mass in the flange frame (m); read-only."""
+        return _read_only(np.array([0.0, 0.0, 0.5 * self.thickness]))
 
-    @property
+    @cached_property
     def inertia(self) -> Array:
-        """3×3 rotational inertia about the centre of mass, in the flange frame (kg·m²)."""
+        """3×3 rotational inertia about the centre of mass, in the flange frame (kg·m²); read-only."""
         sx, sy, sz = 2.0 * self.half_length, 2.0 * self.half_width, self.thickness
         diag = self.mass / 12.0 * np.array([sy**2 + sz**2, sx**2 + sz**2, sx**2 + sy**2])
-        rot = self.rotation
-        return rot @ np.diag(diag) @ rot.T
+        return _read_only(self.rotation @ np.diag(diag) @ self.rotation.T)
 
 
 @dataclass(frozen=True)

@@ -88,7 +88,7 @@ def critical_damping(stiffness: ArrayLike, inertia: ArrayLike, ratio: float = 1.
     return 2.0 * ratio * root @ _sqrtm(0.5 * (inner + inner.T)) @ root
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ImpedanceGains:
     """Cartesian impedance of the hand in task coordinates, and the null-space posture gains.
 
@@ -105,8 +105,12 @@ class ImpedanceGains:
     null_damping: float = 1.0
 
     def __post_init__(self) -> None:
-        _symmetric_positive_definite(self.stiffness, 6, "stiffness")
-        _symmetric_positive_definite(self.damping, 6, "damping", semi=True)
+        stiffness = _symmetric_positive_definite(self.stiffness, 6, "stiffness").copy()
+        damping = _symmetric_positive_definite(self.damping, 6, "damping", semi=True).copy()
+        stiffness.setflags(write=False)
+        damping.setflags(write=False)
+        object.__setattr__(self, "stiffness", stiffness)
+        object.__setattr__(self, "damping", damping)
         for name in ("null_stiffness", "null_damping"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0.0):
@@ -119,13 +123,17 @@ def impedance_gains(
     planar: ArrayLike,
     out_of_plane: tuple[float, float, float] = OUT_OF_PLANE_STIFFNESS,
     damping_ratio: float = 1.0,
+    null_stiffness: float = 5.0,
+    null_damping: float = 1.0,
 ) -> ImpedanceGains:
     """Gains realising the planar stiffness ``planar`` (world ``(x, y, θ)``) at the hand.
 
-    The damping is critical (``damping_ratio``) for the operational-space inertia at ``q``.
+    The damping is ``damping_ratio`` times critical for the operational-space inertia at ``q``;
+    the null-space posture gains are passed through.
     """
     stiffness = cartesian_stiffness(planar, out_of_plane)
-    return ImpedanceGains(stiffness, critical_damping(stiffness, task_inertia(panda, q), damping_ratio))
+    damping = critical_damping(stiffness, task_inertia(panda, q), damping_ratio)
+    return ImpedanceGains(stiffness, damping, null_stiffness, null_damping)
 
 
 def joint_stiffness(task_jac: ArrayLike, stiffness: ArrayLike, null_stiffness: float) -> Array:

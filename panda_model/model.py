@@ -46,7 +46,7 @@ NEUTRAL = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, math.pi / 4])
 """An elbow-up configuration in the work plane, plate facing down: the default IK seed (rad)."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Panda:
     """The Pinocchio Panda with the hand plate appended to joint 7.
 

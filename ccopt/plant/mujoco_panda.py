@@ -1,0 +1,413 @@
+"""Panda MuJoCo plant: the Franka Panda presses the object with a flat hand plate on its flange.
+
+The arm is example-robot-data's Panda URDF compiled by MuJoCo (gripper removed, collision meshes as
+visuals only: robot links collide with nothing), standing in the work plane at
+:class:`~panda_model.hand.Mount`. The plate on the flange is the only robot geom in contact, through
+the hand–object pair of :mod:`ccopt.plant.scene`; a force/torque sensor sits at the flange.
+
+Control, every 1 ms step, from joint positions and velocities only (Pinocchio on the same URDF)::
+
+    τ = Jᵀ (K e − D ė) + h(q, q̇) + N (k_null (q₀ − q) − d_null q̇)
+
+with ``J`` the world-aligned hand Jacobian, ``e`` the 6-D pose error of the hand frame (planar target,
+plate held in the plane), ``K`` the planar stiffness ``diag(PlantParams.K)`` plus a stiff out-of-plane
+block, ``D`` critical for the operational-space inertia at the start, ``h`` gravity and Coriolis
+(Pinocchio ``nonLinearEffects``), ``N = I − J⁺J`` and ``q₀`` the start configuration. The hand wrench
+is the flange F/T reading mapped to ``(f_n, f_t, τ)`` by :func:`panda_model.wrench.hand_wrench`.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+import pinocchio as pin
+from numpy.typing import ArrayLike
+
+from ccopt import geometry
+from ccopt.objects import PlanarObject
+from ccopt.plant import scene
+from ccopt.plant.base import PlantParams, StartConfig
+from ccopt.plant.mujoco_planar import start_poses
+from ccopt.plant.truth import Truth, compute_truth
+from panda_model.hand import HandPlate, Mount
+from panda_model.impedance import OUT_OF_PLANE_STIFFNESS, ImpedanceGains, impedance_gains
+from panda_model.model import TASK_AXES, Panda, hand_rotation, inverse_kinematics, load_panda, planar_pose
+from panda_model.urdf import ARM_JOINTS, FLANGE_LINK, arm_urdf
+from panda_model.wrench import hand_wrench
+
+HAND_BODY = "hand_plate"
+HAND_GEOM = "hand"
+HAND_SITE = "hand_face"
+FT_SITE = "flange_ft"
+FT_SENSORS = ("flange_force", "flange_torque")
+
+CONTACT_FORCE_MIN = 1e-3
+"""Normal force (N) above which a pair counts as in contact."""
+
+
+@dataclass(frozen=True)
+class PandaParams:
+    """Panda-specific settings (the rest is in :class:`~ccopt.plant.base.PlantParams`).
+
+    Attributes:
+        mount: where the robot base stands.
+        out_of_plane: ``(y_out, roll, yaw)`` stiffness holding the plate in the plane, N/m, N·m/rad.
+        null_stiffness: posture stiffness in the arm's null space, N·m/rad.
+        null_damping: joint damping in the null space, N·m·s/rad.
+        armature: reflected rotor inertia of every joint, kg·m² (0.1 as in MuJoCo Menagerie's Panda).
+    """
+
+    mount: Mount = field(default_factory=Mount)
+    out_of_plane: tuple[float, float, float] = OUT_OF_PLANE_STIFFNESS
+    null_stiffness: float = 5.0
+    null_damping: float = 1.0
+    armature: float = 0.1
+
+    def __post_init__(self) -> None:
+        if len(self.out_of_plane) != 3 or not all(math.isfinite(k) and k > 0 for k in self.out_of_plane):
+            raise ValueError(f"out_of_plane must be 3 positive stiffnesses, got {self.out_of_plane!r}")
+        for name in ("null_stiffness", "null_damping", "armature"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0.0):
+                raise ValueError(f"PandaParams.{name} must be a non-negative number, got {value!r}")
+
+
+def hand_plate(params: PlantParams) -> HandPlate:
+    """The plate of a plant: face ``2 l_h`` long, 1.5× the object depth wide, ``hand_thickness`` thick."""
+    return HandPlate(
+        half_length=params.l_h,
+        half_width=0.75 * params.depth,
+        thickness=params.hand_thickness,
+        mass=params.hand_mass,
+    )
+
+
+def _numbers(values: ArrayLike) -> str:
+    return " ".join(f"{float(v):.12g}" for v in np.ravel(values))
+
+
+def _quaternion(rotation: ArrayLike) -> str:
+    quat = np.empty(4)
+    mujoco.mju_mat2Quat(quat, np.asarray(rotation, dtype=float).ravel())
+    return _numbers(quat)
+
+
+def hand_body_xml(hand: HandPlate) -> str:
+    """The plate body (origin and F/T site at the flange, flange axes), its box and face site."""
+    inertia = hand.inertia
+    full = (inertia[0, 0], inertia[1, 1], inertia[2, 2], inertia[0, 1], inertia[0, 2], inertia[1, 2])
+    quat = _quaternion(hand.rotation)
+    half_t = 0.5 * hand.thickness
+    return (
+        f'<body name="{HAND_BODY}">'
+        f'<inertial pos="{_numbers(hand.centre_of_mass)}" mass="{hand.mass:.12g}" '
+        f'fullinertia="{_numbers(full)}"/>'
+        f'<geom name="{HAND_GEOM}" type="box" pos="0 0 {half_t:.12g}" quat="{quat}" '
+        f'size="{hand.half_length:.12g} {hand.half_width:.12g} {half_t:.12g}" contype="0" conaffinity="0" '
+        'rgba="0.2 0.4 0.8 1"/>'
+        f'<site name="{FT_SITE}" size="0.005"/>'
+        f'<site name="{HAND_SITE}" pos="{_numbers(hand.face_centre)}" quat="{quat}" size="0.005"/>'
+        "</body>"
+    )
+
+
+def robot_xml(hand: HandPlate, mount: Mount, armature: float) -> tuple[str, str]:
+    """``(assets, body)`` MJCF of the arm compiled from the URDF, with the plate on the flange.
+
+    Every arm geom is visual only (``contype = conaffinity = 0``); the base body stands at the mount.
+    """
+    spec = mujoco.MjSpec.from_string(arm_urdf())
+    spec.compiler.fusestatic = False
+    root = ET.fromstring(spec.to_xml())
+    for geom in root.iter("geom"):
+        geom.set("contype", "0")
+        geom.set("conaffinity", "0")
+        geom.set("group", "1")
+    for joint in root.iter("joint"):
+        joint.set("armature", f"{armature:.12g}")
+    flange = next(body for body in root.iter("body") if body.get("name") == FLANGE_LINK)
+    flange.append(ET.fromstring(hand_body_xml(hand)))
+    base = ET.Element("body", name="panda_base", pos=_numbers(mount.base_position))
+    base.extend(list(root.find("worldbody")))
+    assets = "".join(ET.tostring(mesh, encoding="unicode") for mesh in root.find("asset"))
+    return assets, ET.tostring(base, encoding="unicode")
+
+
+def panda_model_xml(obj: PlanarObject, params: PlantParams, panda: PandaParams) -> str:
+    """The complete MJCF of the Panda plant: arm + plate, object, ground, pairs, motors, F/T sensor."""
+    assets, robot = robot_xml(hand_plate(params), panda.mount, panda.armature)
+    motors = "".join(f'<motor name="{joint}" joint="{joint}"/>' for joint in ARM_JOINTS)
+    return (
+        f'<mujoco model="ccopt_panda_{obj.name}">'
+        f"{scene.option_xml(params)}"
+        f"<asset>{assets}{scene.object_asset_xml(obj, params)}</asset>"
+        f"<worldbody>{scene.ground_xml()}{scene.object_body_xml(obj)}{robot}</worldbody>"
+        f"{scene.contact_pairs_xml(obj, params, HAND_GEOM)}"
+        f"<actuator>{motors}</actuator>"
+        f'<sensor><force name="{FT_SENSORS[0]}" site="{FT_SITE}"/>'
+        f'<torque name="{FT_SENSORS[1]}" site="{FT_SITE}"/></sensor>'
+        "</mujoco>"
+    )
+
+
+def _as_vector3(name: str, value: ArrayLike) -> np.ndarray:
+    vector = np.asarray(value, dtype=float)
+    if vector.shape != (3,) or not math.isfinite(vector.sum()):
+        raise ValueError(f"{name} must be 3 finite numbers (x, y, θ), got {value!r}")
+    return vector
+
+
+def _slice(addresses: list[int]) -> slice:
+    """The contiguous slice covering ``addresses`` (consecutive by construction of the model)."""
+    if addresses != list(range(addresses[0], addresses[0] + len(addresses))):
+        raise RuntimeError(f"expected consecutive addresses, got {addresses}")
+    return slice(addresses[0], addresses[0] + len(addresses))
+
+
+class PandaPlant:
+    """Panda hand–object–ground simulation (implements :class:`~ccopt.plant.base.Plant`).
+
+    Args:
+        obj: the object.
+        params: plant parameters (``K`` is the planar hand stiffness, world axes).
+        start: start configuration: the arm is put there by inverse kinematics, settles for
+            ``start.settle_time`` and then resets its clock to 0.
+        panda: Panda-specific settings.
+    """
+
+    def __init__(
+        self,
+        obj: PlanarObject,
+        params: PlantParams | None = None,
+        start: StartConfig | None = None,
+        *,
+        panda: PandaParams | None = None,
+    ) -> None:
+        self.obj = obj
+        self.params = params or PlantParams()
+        self.start = start or StartConfig()
+        self.panda_params = panda or PandaParams()
+        self.hand = hand_plate(self.params)
+        self.panda: Panda = load_panda(self.hand, self.panda_params.mount, self.panda_params.armature)
+        object_pose, start_hand, target = start_poses(obj, self.start, self.params)
+        q_start = inverse_kinematics(self.panda, start_hand)
+
+        self._model = mujoco.MjModel.from_xml_string(panda_model_xml(obj, self.params, self.panda_params))
+        self._data = mujoco.MjData(self._model)
+        m = self._model
+        self._arm_q = _slice([int(m.jnt_qposadr[m.joint(j).id]) for j in ARM_JOINTS])
+        self._arm_v = _slice([int(m.jnt_dofadr[m.joint(j).id]) for j in ARM_JOINTS])
+        self._obj_qpos = _slice([int(m.jnt_qposadr[m.joint(j).id]) for j in scene.OBJECT_JOINTS])
+        self._obj_dof = _slice([int(m.jnt_dofadr[m.joint(j).id]) for j in scene.OBJECT_JOINTS])
+        self._ft = _slice([int(m.sensor_adr[m.sensor(s).id]) + i for s in FT_SENSORS for i in range(3)])
+        self._hand_site = m.site(HAND_SITE).id
+        self._hand_geom = m.geom(HAND_GEOM).id
+        self._object_geom = m.geom(scene.OBJECT_GEOM).id
+        self._ground_geom = m.geom(scene.GROUND_GEOM).id
+        self._object_body = m.body(scene.OBJECT_BODY).id
+        self._push_end: float | None = None
+        self._force = np.zeros(6)
+
+        self.gains: ImpedanceGains = impedance_gains(
+            self.panda,
+            q_start,
+            np.diag(self.params.K),
+            self.panda_params.out_of_plane,
+            self.params.damping_ratio,
+            self.panda_params.null_stiffness,
+            self.panda_params.null_damping,
+        )
+        self._stiffness = TASK_AXES.T @ self.gains.stiffness @ TASK_AXES
+        self._damping = TASK_AXES.T @ self.gains.damping @ TASK_AXES
+        self._posture = q_start.copy()
+        self._null_stiffness, self._null_damping = self.gains.null_stiffness, self.gains.null_damping
+        self._target = np.full(3, np.nan)
+        self._target_position = np.array([0.0, self.panda_params.mount.plane_y, 0.0])
+        self._target_rotation = np.eye(3)
+        self._planar_to_spatial = TASK_AXES[:3].T.copy()
+        self._target_twist = np.zeros(6)
+        self._error = np.zeros(6)
+        self._hand_rotation = np.eye(3)
+        self._gram = np.zeros((6, 6))
+        self._range = np.zeros(6)
+        self._q, self._v = self._data.qpos[self._arm_q], self._data.qvel[self._arm_v]
+
+        self._data.qpos[self._arm_q] = q_start
+        self._data.qpos[self._obj_qpos] = object_pose
+        self.set_target(target)
+        self._control()
+        mujoco.mj_forward(m, self._data)
+        self.step(round(self.start.settle_time / self.timestep))
+        self._data.time = 0.0
+
+    # --- simulator access (read only: do not mutate) ---------------------------------------------
+
+    @property
+    def model(self) -> mujoco.MjModel:
+        """The MuJoCo model (for tests and benchmarks; do not mutate)."""
+        return self._model
+
+    @property
+    def data(self) -> mujoco.MjData:
+        """The MuJoCo data (for tests and benchmarks; do not mutate)."""
+        return self._data
+
+    @property
+    def time(self) -> float:
+        """Simulated time since the end of settling, s."""
+        return float(self._data.time)
+
+    @property
+    def timestep(self) -> float:
+        """Simulation step, s."""
+        return float(self._model.opt.timestep)
+
+    # --- commands --------------------------------------------------------------------------------
+
+    def set_target(self, pose: ArrayLike, velocity: ArrayLike | None = None) -> None:
+        """Hand impedance target, world ``(x, y, θ)`` (m, rad), and its velocity (m/s, rad/s)."""
+        x, y, theta = _as_vector3("target pose", pose)
+        if theta != self._target[2]:
+            self._target_rotation[:] = hand_rotation(theta)
+        self._target[:] = (x, y, theta)
+        self._target_position[0], self._target_position[2] = x, y
+        if velocity is None:
+            self._target_twist[:] = 0.0
+        else:
+            np.matmul(
+                self._planar_to_spatial, _as_vector3("target velocity", velocity), out=self._target_twist
+            )
+
+    def target(self) -> np.ndarray:
+        """Current impedance target, world ``(x, y, θ)``."""
+        return self._target.copy()
+
+    def push_object(self, force: ArrayLike, duration: float) -> None:
+        """Apply world force ``(f_x, f_y)`` (N) at the object's centroid for ``duration`` s from now."""
+        push = np.asarray(force, dtype=float)
+        if push.shape != (2,) or not np.all(np.isfinite(push)):
+            raise ValueError(f"force must be 2 finite numbers (f_x, f_y), got {force!r}")
+        if not math.isfinite(duration) or duration < 0.0:
+            raise ValueError(f"duration must be a non-negative number of s, got {duration!r}")
+        self._data.xfrc_applied[self._object_body, [0, 2]] = push
+        self._push_end = self.time + duration
+
+    def step(self, n_steps: int = 1) -> None:
+        """Advance by ``n_steps`` 1-kHz control-and-physics steps (ending a push when it is over)."""
+        if isinstance(n_steps, bool) or not isinstance(n_steps, int | np.integer) or n_steps < 0:
+            raise ValueError(f"n_steps must be a non-negative integer, got {n_steps!r}")
+        model, data = self._model, self._data
+        for _ in range(int(n_steps)):
+            if self._push_end is not None and data.time >= self._push_end - 1e-9:
+                data.xfrc_applied[self._object_body] = 0.0
+                self._push_end = None
+            self._control()
+            mujoco.mj_step(model, data)
+        # mj_step leaves positions and velocities of bodies at the state before its last update:
+        # bring them to the current state for hand_pose/hand_velocity (contacts and the F/T reading
+        # stay those of the last step, as in every MuJoCo plant).
+        mujoco.mj_kinematics(model, data)
+        mujoco.mj_comPos(model, data)
+        mujoco.mj_comVel(model, data)
+
+    def _control(self) -> None:
+        """Set the joint torques of the Cartesian impedance from the current joint state."""
+        model, data, frame = self.panda.model, self.panda.data, self.panda.hand_frame
+        q, v = self._q, self._v
+        jac = pin.computeFrameJacobian(model, data, q, frame, pin.LOCAL_WORLD_ALIGNED)
+        placement = data.oMf[frame]
+        self._hand_rotation[:] = placement.rotation
+        self._error[:3] = self._target_position - placement.translation
+        self._error[3:] = pin.log3(self._target_rotation @ self._hand_rotation.T)
+        wrench = self._stiffness @ self._error + self._damping @ (self._target_twist - jac @ v)
+        posture = self._null_stiffness * (self._posture - q) - self._null_damping * v
+        # Null-space projection N·posture = posture − Jᵀ (J Jᵀ)⁻¹ J·posture, by an in-place Cholesky.
+        np.matmul(jac, jac.T, out=self._gram)
+        mujoco.mju_cholFactor(self._gram, 0.0)
+        mujoco.mju_cholSolve(self._range, self._gram, jac @ posture)
+        torque = jac.T @ (wrench - self._range)
+        torque += posture
+        torque += pin.nonLinearEffects(model, data, q, v)
+        self._data.ctrl[:] = torque
+
+    # --- state -----------------------------------------------------------------------------------
+
+    def joint_positions(self) -> np.ndarray:
+        """Arm joint angles, rad."""
+        return self._data.qpos[self._arm_q].copy()
+
+    def hand_pose(self) -> np.ndarray:
+        """True world ``(x_h, y_h, θ_h)`` of the hand contact-face centre (MuJoCo's kinematics)."""
+        return planar_pose(
+            self._data.site_xpos[self._hand_site], self._data.site_xmat[self._hand_site].reshape(3, 3)
+        )
+
+    def hand_velocity(self) -> np.ndarray:
+        """True world ``(ẋ_h, ẏ_h, θ̇_h)`` of the contact-face centre."""
+        velocity = np.zeros(6)
+        mujoco.mj_objectVelocity(
+            self._model, self._data, mujoco.mjtObj.mjOBJ_SITE, self._hand_site, velocity, 0
+        )
+        return TASK_AXES[:3] @ np.concatenate((velocity[3:], velocity[:3]))
+
+    def object_pose(self) -> np.ndarray:
+        """True world ``(x, y, φ)`` of the object's centroid frame."""
+        return self._data.qpos[self._obj_qpos].copy()
+
+    def object_velocity(self) -> np.ndarray:
+        """True world ``(ẋ, ẏ, φ̇)`` of the object's centroid frame."""
+        return self._data.qvel[self._obj_dof].copy()
+
+    def flange_wrench(self) -> np.ndarray:
+        """Wrist F/T reading: wrench of the flange on the plate, flange frame, about the flange (N, N·m)."""
+        return self._data.sensordata[self._ft].copy()
+
+    def hand_wrench(self) -> np.ndarray:
+        """Hand wrench ``(f_n, f_t, τ)`` on the object, from the F/T reading (gravity-compensated)."""
+        flange_rotation = self._hand_rotation @ self.hand.rotation.T
+        return hand_wrench(self._data.sensordata[self._ft], flange_rotation, self.hand)
+
+    def _pair_wrench(self, geom_a: int, geom_b: int, about: np.ndarray) -> np.ndarray:
+        """World planar wrench ``(f_x, f_y, τ)`` that ``geom_a`` exerts on ``geom_b``, τ about ``about``."""
+        total = np.zeros(3)
+        contact = self._data.contact
+        for i in range(self._data.ncon):
+            g1, g2 = contact.geom[i]
+            if {g1, g2} != {geom_a, geom_b}:
+                continue
+            mujoco.mj_contactForce(self._model, self._data, i, self._force)
+            force = self._force[:3] @ contact.frame[i].reshape(3, 3)
+            if g1 != geom_a:
+                force = -force
+            fx, fy = force[0], force[2]
+            px, py = contact.pos[i][[0, 2]] - about
+            total += (fx, fy, px * fy - py * fx)
+        return total
+
+    def hand_wrench_world(self) -> np.ndarray:
+        """True world wrench ``(f_x, f_y, τ)`` of the hand on the object from the contact forces."""
+        return self._pair_wrench(self._hand_geom, self._object_geom, self.hand_pose()[:2])
+
+    def ground_wrench(self) -> np.ndarray:
+        """True world wrench ``(f_x, f_y, τ)`` of the ground on the object, τ about the world origin."""
+        return self._pair_wrench(self._ground_geom, self._object_geom, np.zeros(2))
+
+    def truth(self) -> Truth:
+        """Ground truth of the contact configuration (see :mod:`ccopt.plant.truth`)."""
+        pose = self.hand_pose()
+        hand_force = geometry.wrench_world_to_hand(pose[2], self.hand_wrench_world())[0]
+        return compute_truth(
+            time=self.time,
+            obj=self.obj,
+            hand_face=self.start.hand_face,
+            object_pose=self.object_pose(),
+            object_velocity=self.object_velocity(),
+            hand_pose=pose,
+            hand_velocity=self.hand_velocity(),
+            in_contact_hand=hand_force > CONTACT_FORCE_MIN,
+            in_contact_ground=self.ground_wrench()[1] > CONTACT_FORCE_MIN,
+        )
