@@ -210,7 +210,6 @@ class PandaPlant:
         self._ground_geom = m.geom(scene.GROUND_GEOM).id
         self._object_body = m.body(scene.OBJECT_BODY).id
         self._push_end: float | None = None
-        self._force = np.zeros(6)
 
         self.gains: ImpedanceGains = impedance_gains(
             self.panda,
@@ -371,30 +370,14 @@ class PandaPlant:
         flange_rotation = self._hand_rotation @ self.hand.rotation.T
         return hand_wrench(self._data.sensordata[self._ft], flange_rotation, self.hand)
 
-    def _pair_wrench(self, geom_a: int, geom_b: int, about: np.ndarray) -> np.ndarray:
-        """World planar wrench ``(f_x, f_y, τ)`` that ``geom_a`` exerts on ``geom_b``, τ about ``about``."""
-        total = np.zeros(3)
-        contact = self._data.contact
-        for i in range(self._data.ncon):
-            g1, g2 = contact.geom[i]
-            if {g1, g2} != {geom_a, geom_b}:
-                continue
-            mujoco.mj_contactForce(self._model, self._data, i, self._force)
-            force = self._force[:3] @ contact.frame[i].reshape(3, 3)
-            if g1 != geom_a:
-                force = -force
-            fx, fy = force[0], force[2]
-            px, py = contact.pos[i][[0, 2]] - about
-            total += (fx, fy, px * fy - py * fx)
-        return total
-
     def hand_wrench_world(self) -> np.ndarray:
-        """True world wrench ``(f_x, f_y, τ)`` of the hand on the object from the contact forces."""
-        return self._pair_wrench(self._hand_geom, self._object_geom, self.hand_pose()[:2])
+        """True world wrench ``(f_x, f_y, τ)`` of the hand on the object from the contact forces,
+        ``τ`` about the face centre (what :meth:`hand_wrench` measures through the wrist F/T)."""
+        return scene.pair_wrench(self._data, self._hand_geom, self._object_geom, self.hand_pose()[:2])
 
     def ground_wrench(self) -> np.ndarray:
-        """True world wrench ``(f_x, f_y, τ)`` of the ground on the object, τ about the world origin."""
-        return self._pair_wrench(self._ground_geom, self._object_geom, np.zeros(2))
+        """True world wrench ``(f_x, f_y, τ)`` of the ground on the object, ``τ`` about its centroid."""
+        return scene.pair_wrench(self._data, self._ground_geom, self._object_geom, self.object_pose()[:2])
 
     def truth(self) -> Truth:
         """Ground truth of the contact configuration (see :mod:`ccopt.plant.truth`)."""
