@@ -7,13 +7,25 @@ the hand–object pair of :mod:`ccopt.plant.scene`; a force/torque sensor sits a
 
 Control, every 1 ms step, from joint positions and velocities only (Pinocchio on the same URDF)::
 
-    τ = Jᵀ (K e − D ė) + h(q, q̇) + N (k_null (q₀ − q) − d_null q̇)
+    τ = Jᵀ (K e + D ė) + h(q, q̇) + N (k_null (q₀ − q) − d_null q̇)
 
-with ``J`` the world-aligned hand Jacobian, ``e`` the 6-D pose error of the hand frame (planar target,
-plate held in the plane), ``K`` the planar stiffness ``diag(PlantParams.K)`` plus a stiff out-of-plane
-block, ``D`` critical for the operational-space inertia at the start, ``h`` gravity and Coriolis
-(Pinocchio ``nonLinearEffects``), ``N = I − J⁺J`` and ``q₀`` the start configuration. The hand wrench
-is the flange F/T reading mapped to ``(f_n, f_t, τ)`` by :func:`panda_model.wrench.hand_wrench`.
+with ``J`` the world-aligned hand Jacobian, ``e`` the 6-D error *target − hand* of the hand frame
+(planar target, plate held in the plane; ``ė`` uses the target velocity as feed-forward), ``K`` the
+planar stiffness ``diag(PlantParams.K)`` plus a stiff out-of-plane block, ``D`` critical for the
+operational-space inertia at the start, ``h`` gravity and Coriolis (Pinocchio ``nonLinearEffects``),
+``N = I − J⁺J`` and ``q₀`` the start configuration. Statically the hand then shows exactly ``K`` in
+the plane (see :mod:`panda_model.impedance`). The hand wrench is the flange F/T reading mapped to
+``(f_n, f_t, τ)`` by :func:`panda_model.wrench.hand_wrench` (quasi-static: the plate's inertia
+forces are not compensated).
+
+The plate is ``2 l_h`` long, ``1.5 depth`` wide, ``hand_thickness`` thick and weighs ``hand_mass``
+(:func:`hand_plate`); the motors keep the URDF effort limits (87 N·m, 12 N·m on joints 5–7).
+With the default mount (base 0.5 m behind the ccopt origin) the hand reaches, with 0.1 rad of
+joint-limit margin, ``θ_h`` in about [−50°, +15°] for ``x_h`` in [−0.1, 0.15] m and ``y_h`` in
+[0.05, 0.25] m ([−60°, +30°] at ``x_h = 0``); positive angles are limited by joint 6.
+
+Timing: after :meth:`PandaPlant.step`, poses and velocities are those of the current state, while
+the F/T reading and the contacts are those MuJoCo computed at the start of the last step.
 """
 
 from __future__ import annotations
