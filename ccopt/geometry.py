@@ -27,6 +27,8 @@ so that ``qpos`` equals the CCW planar angle.
 
 from __future__ import annotations
 
+import math
+
 import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -90,8 +92,13 @@ def wrench_hand_to_world(theta_h: float, wrench_hand: ArrayLike) -> Array:
 
 
 def wrench_world_to_hand(theta_h: float, wrench_world: ArrayLike) -> Array:
-    """World ``(f_x, f_y, τ)`` (torque about the hand centre) to hand-frame ``(f_n, f_t, τ)``."""
-    return planar_hand_to_world(theta_h).T @ np.asarray(wrench_world, dtype=float)
+    """World ``(f_x, f_y, τ)`` (torque about the hand centre) to hand-frame ``(f_n, f_t, τ)``.
+
+    Written out (``f_n = e_n·f``, ``f_t = e_t·f``) because plants and sensors call it every tick.
+    """
+    s, c = math.sin(theta_h), math.cos(theta_h)
+    f_x, f_y, torque = wrench_world
+    return np.array([s * f_x - c * f_y, c * f_x + s * f_y, torque])
 
 
 def twist_hand_to_world(theta_h: float, twist_hand: ArrayLike) -> Array:

@@ -34,6 +34,14 @@ def _positive(name: str, value: object) -> float:
     return number
 
 
+def planar_vector(name: str, value: ArrayLike) -> np.ndarray:
+    """``value`` as 3 finite floats ``(x, y, θ)``; ``ValueError`` naming ``name`` otherwise."""
+    vector = np.asarray(value, dtype=float)
+    if vector.shape != (3,) or not math.isfinite(vector.sum()):
+        raise ValueError(f"{name} must be 3 finite numbers (x, y, θ), got {value!r}")
+    return vector
+
+
 @dataclass(frozen=True)
 class PlantParams:
     """Physical and numerical parameters of a simulated plant.

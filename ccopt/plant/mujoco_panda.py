@@ -42,7 +42,7 @@ from numpy.typing import ArrayLike
 from ccopt import geometry
 from ccopt.objects import PlanarObject
 from ccopt.plant import scene
-from ccopt.plant.base import PlantParams, StartConfig
+from ccopt.plant.base import PlantParams, StartConfig, planar_vector
 from ccopt.plant.mujoco_planar import start_poses
 from ccopt.plant.truth import Truth, compute_truth
 from panda_model.hand import HandPlate, Mount
@@ -166,13 +166,6 @@ def panda_model_xml(obj: PlanarObject, params: PlantParams, panda: PandaParams) 
     )
 
 
-def _as_vector3(name: str, value: ArrayLike) -> np.ndarray:
-    vector = np.asarray(value, dtype=float)
-    if vector.shape != (3,) or not math.isfinite(vector.sum()):
-        raise ValueError(f"{name} must be 3 finite numbers (x, y, θ), got {value!r}")
-    return vector
-
-
 def _slice(addresses: list[int]) -> slice:
     """The contiguous slice covering ``addresses`` (consecutive by construction of the model)."""
     if addresses != list(range(addresses[0], addresses[0] + len(addresses))):
@@ -281,7 +274,7 @@ class PandaPlant:
 
     def set_target(self, pose: ArrayLike, velocity: ArrayLike | None = None) -> None:
         """Hand impedance target, world ``(x, y, θ)`` (m, rad), and its velocity (m/s, rad/s)."""
-        x, y, theta = _as_vector3("target pose", pose)
+        x, y, theta = planar_vector("target pose", pose)
         if theta != self._target[2]:
             self._target_rotation[:] = hand_rotation(theta)
         self._target[:] = (x, y, theta)
@@ -290,7 +283,7 @@ class PandaPlant:
             self._target_twist[:] = 0.0
         else:
             np.matmul(
-                self._planar_to_spatial, _as_vector3("target velocity", velocity), out=self._target_twist
+                self._planar_to_spatial, planar_vector("target velocity", velocity), out=self._target_twist
             )
 
     def target(self) -> np.ndarray:

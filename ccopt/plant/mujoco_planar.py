@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike
 from ccopt import geometry
 from ccopt.objects import PlanarObject
 from ccopt.plant import scene
-from ccopt.plant.base import PlantParams, StartConfig
+from ccopt.plant.base import PlantParams, StartConfig, planar_vector
 from ccopt.plant.truth import Truth, compute_truth, lowest_vertex
 
 HAND_BODY = "hand"
@@ -127,13 +127,6 @@ def start_poses(
     return object_pose, hand_pose, target
 
 
-def _as_vector3(name: str, value: ArrayLike) -> np.ndarray:
-    vector = np.asarray(value, dtype=float)
-    if vector.shape != (3,) or not math.isfinite(vector.sum()):
-        raise ValueError(f"{name} must be 3 finite numbers (x, y, θ), got {value!r}")
-    return vector
-
-
 class PlanarPlant:
     """Planar hand–object–ground simulation (implements :class:`~ccopt.plant.base.Plant`).
 
@@ -215,8 +208,8 @@ class PlanarPlant:
 
     def set_target(self, pose: ArrayLike, velocity: ArrayLike | None = None) -> None:
         """Hand impedance target, world ``(x, y, θ)`` (m, rad), and its velocity (m/s, rad/s)."""
-        self._ctrl[:3] = _as_vector3("target pose", pose)
-        self._ctrl[3:] = 0.0 if velocity is None else _as_vector3("target velocity", velocity)
+        self._ctrl[:3] = planar_vector("target pose", pose)
+        self._ctrl[3:] = 0.0 if velocity is None else planar_vector("target velocity", velocity)
 
     def target(self) -> np.ndarray:
         """Current impedance target, world ``(x, y, θ)``."""
@@ -279,11 +272,8 @@ class PlanarPlant:
 
     def hand_wrench(self) -> np.ndarray:
         """True hand-frame wrench ``(f_n, f_t, τ)`` of the hand on the object, τ about the face centre."""
-        theta_h = self._qpos[self._hand_qpos[2]]
-        fx, fy, torque = self.hand_wrench_world()
-        # wrench_world_to_hand, written out: it is called every tick and must stay cheap
-        e_n, e_t = geometry.hand_normal(theta_h), geometry.hand_tangent(theta_h)
-        return np.array([fx * e_n[0] + fy * e_n[1], fx * e_t[0] + fy * e_t[1], torque])
+        theta_h = float(self._qpos[self._hand_qpos[2]])
+        return geometry.wrench_world_to_hand(theta_h, -self._qfrc_constraint[self._hand_dof])
 
     def ground_wrench(self) -> np.ndarray:
         """True world wrench ``(f_x, f_y, τ)`` of the ground on the object, τ about its centroid.

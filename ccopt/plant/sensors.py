@@ -79,6 +79,10 @@ class Measurement:
     hand_wrench: np.ndarray
 
 
+BATCH = 1024
+"""Samples of noise drawn at once (one generator call per batch keeps a read cheap)."""
+
+
 class Sensors:
     """Noisy, biased, seeded view of a :class:`~ccopt.plant.base.Plant`.
 
@@ -98,13 +102,26 @@ class Sensors:
         )
         self.bias = self._rng.standard_normal(3) * np.array([p.bias_force, p.bias_force, p.bias_torque])
         """The constant F/T bias of this run, hand frame ``(f_n, f_t, τ)``."""
+        self._offsets = np.empty((0, 6))
+        self._dropped = np.empty(0, dtype=bool)
+        self._cursor = 0
+
+    def _refill(self) -> None:
+        """Draw the next :data:`BATCH` samples' noise (plus bias) and dropouts at once."""
+        self._offsets = self._rng.standard_normal((BATCH, 6)) * self._sigma
+        self._offsets[:, 3:] += self.bias
+        self._dropped = self._rng.random(BATCH) < self.params.dropout_probability
+        self._cursor = 0
 
     def read(self) -> Measurement:
         """Sample the sensors now."""
-        noise = self._rng.standard_normal(6) * self._sigma
-        dropout = self.params.dropout_probability
-        if dropout > 0.0 and self._rng.random() < dropout:
+        if self._cursor == len(self._dropped):
+            self._refill()
+        k = self._cursor
+        self._cursor += 1
+        if self._dropped[k]:
             return Measurement(self.plant.time, np.full(3, np.nan), np.full(3, np.nan))
-        pose = self.plant.hand_pose() + noise[:3]
-        wrench = self.plant.hand_wrench() + self.bias + noise[3:]
-        return Measurement(self.plant.time, pose, wrench)
+        offsets = self._offsets[k]
+        return Measurement(
+            self.plant.time, self.plant.hand_pose() + offsets[:3], self.plant.hand_wrench() + offsets[3:]
+        )
