@@ -1,0 +1,1 @@
+"""Scripted studies: python -m studies.NAME, or ccopt study NAME."""
