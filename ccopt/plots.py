@@ -377,13 +377,15 @@ def control_figure(record: Record) -> Figure:
 # --- animation ------------------------------------------------------------------------------------
 
 
-def _object(record: Record) -> tuple[PlanarObject, int] | None:
-    """The object of ``meta`` and the index of the face the hand is on, or None if unknown/invalid."""
+def _object(record: Record) -> tuple[np.ndarray, float] | None:
+    """Body-frame vertices (m) of the object of ``meta`` and the angle (rad) to add to the angle of its
+    hand face to get the object angle; None if the object or the face is unknown or invalid.
+    """
     spec = record.meta.get("object")
     start = record.meta.get("params", {}).get("start", {})
     try:
         obj = PlanarObject(spec["name"], spec["vertices"], spec["mass"], spec["mu_hand"], spec["mu_ground"])
-        return obj, obj.face_index(start.get("hand_face", StartConfig().hand_face))
+        return obj.vertices, -face_angle(obj, start.get("hand_face", StartConfig().hand_face), 0.0)
     except (KeyError, TypeError, ValueError):
         return None
 
@@ -398,9 +400,9 @@ def _ground_contact(pose: np.ndarray, s_h: np.ndarray, d: np.ndarray) -> np.ndar
     )
 
 
-def _polygon(obj: PlanarObject, face: int, theta_o: float, r_o: np.ndarray) -> np.ndarray:
-    """World vertices of the object whose ``face`` is at angle ``θ_o`` and lowest vertex at ``r_o``."""
-    turned = geometry.transform_points(obj.vertices, (0.0, 0.0, theta_o - face_angle(obj, face, 0.0)))
+def _polygon(vertices: np.ndarray, offset: float, theta_o: float, r_o: np.ndarray) -> np.ndarray:
+    """World vertices of the object at angle ``θ_o + offset`` whose lowest vertex is at ``r_o`` (m)."""
+    turned = geometry.transform_points(vertices, (0.0, 0.0, theta_o + offset))
     return turned - turned[lowest_vertex(turned)] + r_o
 
 
