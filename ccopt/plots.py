@@ -7,7 +7,8 @@ A panel whose data are missing (an empty or interrupted record, no valid kinemat
 says "no data" instead of raising.
 
 The coordinates are ``(θ_o, s_h, s_g)`` in that order, and a sample's ``motion`` code
-(0 hold, 1 pivot, 2 slide_hand, 3 slide_ground) commands coordinate ``motion − 1``.
+(``ccopt.schedule.MOTION_CODES``: 0 hold, 1 pivot, 2 slide_hand, 3 slide_ground) commands
+coordinate ``motion − 1``.
 """
 
 from __future__ import annotations

@@ -33,6 +33,8 @@ Kind = Literal["pivot", "slide_hand", "slide_ground", "hold"]
 KINDS: tuple[Kind, ...] = ("pivot", "slide_hand", "slide_ground", "hold")
 COORDINATE = {"pivot": 0, "slide_hand": 1, "slide_ground": 2}
 """Index of the coordinate ``(θ_o, s_h, s_g)`` each kind of step changes."""
+MOTION_CODES = {"hold": 0, "pivot": 1, "slide_hand": 2, "slide_ground": 3}
+"""Integer code of each kind of step in a run record; ``code − 1`` is its :data:`COORDINATE`."""
 
 PIVOT_STEP = np.deg2rad(7.2)
 SLIDE_STEP = 0.010
