@@ -23,10 +23,13 @@ def state(wrench=(10.0, 0.5, 0.0), valid=True):
         wrench=np.array(wrench),
         cone_rows=rows,
         cone_bounds=bounds,
+        row_valid=np.ones(6, dtype=bool),
         l_h=L_H,
-        coordinates=np.array([THETA, S_H, S_G]),
+        hand_angle=THETA,
+        s_h=S_H,
         d=D,
         kinematics_valid=valid,
+        coordinates=np.array([THETA, S_H, S_G]),
     )
 
 

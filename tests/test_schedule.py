@@ -22,6 +22,12 @@ def test_paper_schedule_explores_then_manipulates():
     assert all(abs(s.delta) == pytest.approx(0.010) for s in paper.steps if s.kind.startswith("slide"))
 
 
+def test_smoke_schedule_pivots_both_ways():
+    smoke = schedule.load_schedule("smoke")
+    deltas = [s.delta for s in smoke.steps if s.kind == "pivot"]
+    assert len(deltas) == 4 and sum(deltas) == pytest.approx(0.0) and min(deltas) < 0 < max(deltas)
+
+
 def test_file_round_trip_in_degrees_and_millimetres(tmp_path):
     original = schedule.load_schedule("smoke")
     path = tmp_path / "s.json"

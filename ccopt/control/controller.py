@@ -14,7 +14,11 @@ Cost (paper eq. 26)
 Rows (paper eq. 24)
     The estimated cone rows ``nⱼᵀ(w + γⱼ K Δx) ≤ bⱼ − marginⱼ`` minus those the commanded motion
     removes (:func:`ccopt.modes.kept_rows`), plus ``f_min ≤ f_n ≤ f_max``. Margins keep the kept
-    inequalities strict, as the paper requires for sticking and flush contact.
+    inequalities strict, as the paper requires for sticking and flush contact. Rows the estimator
+    has not estimated yet are not enforced: a cone built only from the wrenches seen so far would
+    keep the wrench where it has been and never let exploration widen it (the paper's exploration
+    learns each constraint by pushing towards it). The mode classifier stays conservative about
+    them; the controller relies on the exploration schedule to meet them first.
 
 The step is clipped to a maximum per tick (a target speed limit) and reported with the QP's
 diagnostics; an infeasible tick still returns the least-violating step and says so.
@@ -43,12 +47,16 @@ class ControllerParams:
         hold_weights: ``α`` for the held (not commanded) coordinates.
         convergence: ``β``: fraction of the remaining error asked for per tick.
         force_weight: ``α`` of the normal-force term.
+        force_gain: fraction of the normal-force error corrected per tick (the hand and contact
+            form a ~7 Hz oscillator: a dead-beat correction at 30 Hz would overshoot).
         normal_force: target normal force, N.
         force_limits: ``(f_min, f_max)`` on the predicted normal force, N.
         row_gains: ``γ`` for the cone rows (the force limits use 1).
-        friction_margin: margin on the hand and ground friction rows, as a fraction of ``f_n``.
+        friction_margin: margin on the hand friction rows, as a fraction of the cone's half-width
+            ``μ̂_h f_n`` (so a conservative ``μ̂_h`` is not eaten by its own margin).
         torque_margin: margin on the torque rows, as a fraction of ``l_h f_n``.
-        min_margin: lower bound of every cone-row margin, N (or N·m for torques).
+        ground_margin: margin on the ground rows, N.
+        min_margin: lower bound of the hand-row margins, N (× ``l_h`` for torques).
         d_guess: ``d`` of the naive ``v_θ`` before the kinematics are known, m.
         max_step: largest ``|Δn|, |Δt|`` (m) and ``|Δθ|`` (rad) per tick.
     """
@@ -59,14 +67,16 @@ class ControllerParams:
     hold_weights: tuple[float, float, float] = (0.3, 0.3, 0.3)
     convergence: float = 0.3
     force_weight: float = 0.5
-    normal_force: float = 12.0
+    force_gain: float = 0.2
+    normal_force: float = 10.0
     force_limits: tuple[float, float] = (3.0, 25.0)
     row_gains: float = 1.0
-    friction_margin: float = 0.08
-    torque_margin: float = 0.15
-    min_margin: float = 0.3
+    friction_margin: float = 0.15
+    torque_margin: float = 0.2
+    ground_margin: float = 0.5
+    min_margin: float = 0.2
     d_guess: float = 0.08
-    max_step: tuple[float, float, float] = (0.004, 0.004, np.deg2rad(2.0))
+    max_step: tuple[float, float, float] = (0.002, 0.002, np.deg2rad(1.0))
 
     def __post_init__(self) -> None:
         stiffness = np.asarray(self.stiffness, dtype=float)
@@ -93,19 +103,26 @@ class ControlInput:
         wrench: measured hand wrench ``(f_n, f_t, τ)``, N, N, N·m.
         cone_rows: estimated generalized friction cone ``N`` (6×3), rows in :class:`Row` order.
         cone_bounds: its ``b`` (6,).
+        row_valid: which cone rows are estimated (6,) bool; only those are enforced.
         l_h: torque-row lever used by the estimate (m): scales the torque margin.
-        coordinates: estimated ``(θ_o, s_h, s_g)`` (rad, m, m).
-        d: estimated distance ``d`` from the ground contact to the hand face, m.
-        kinematics_valid: whether ``s_h``, ``s_g`` and ``d`` are estimated yet.
+        hand_angle: measured ``θ_h`` (rad): the hand frame in which ``Δx_tar`` is expressed.
+        s_h: estimated ``s_h`` (m), shapes ``v_θ`` once the kinematics are valid.
+        d: estimated distance ``d`` from the ground contact to the hand face (m), likewise.
+        kinematics_valid: whether ``s_h`` and ``d`` are estimated yet (else the naive ``v_θ``).
+        coordinates: the ``(θ_o, s_h, s_g)`` that progress is measured on (rad, m, m), the same
+            source as the command's targets.
     """
 
     wrench: np.ndarray
     cone_rows: np.ndarray
     cone_bounds: np.ndarray
+    row_valid: np.ndarray
     l_h: float
-    coordinates: np.ndarray
+    hand_angle: float
+    s_h: float
     d: float
     kinematics_valid: bool
+    coordinates: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -166,11 +183,10 @@ class Controller:
     def build_instance(self, state: ControlInput, command: Command) -> QPInstance:
         """The QP of this tick (exposed for studies and tests)."""
         p = self.params
-        theta_o, s_h, _ = state.coordinates
         if state.kinematics_valid:
-            vectors = contact.admissible_motions(theta_o, s_h, state.d)
+            vectors = contact.admissible_motions(state.hand_angle, state.s_h, state.d)
         else:
-            vectors = contact.admissible_motions(theta_o, 0.0, p.d_guess)
+            vectors = contact.admissible_motions(state.hand_angle, 0.0, p.d_guess)
         errors = np.asarray(command.targets) - np.asarray(state.coordinates)
         regulated = _REGULATED[command.motion]
         directions, weights, targets = [], [], []
@@ -182,12 +198,12 @@ class Controller:
         k_n = p.stiffness[0, 0]
         directions.append(np.array([1.0, 0.0, 0.0]))
         weights.append(p.force_weight)
-        targets.append((p.normal_force - f_n) / k_n)  # a displacement along e_n, m
-        margins = self._margins(f_n, state.l_h)
+        targets.append(p.force_gain * (p.normal_force - f_n) / k_n)  # a displacement along e_n, m
+        margins = self._margins(f_n, state)
         f_min, f_max = p.force_limits
         rows = np.vstack([state.cone_rows, [[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]]])
         bounds = np.concatenate([state.cone_bounds - margins, [f_max, -f_min]])
-        active = np.concatenate([modes.kept_rows(command.motion), [True, True]])
+        active = np.concatenate([modes.kept_rows(command.motion) & state.row_valid, [True, True]])
         return QPInstance(
             stiffness=p.stiffness,
             wrench=np.asarray(state.wrench, dtype=float),
@@ -201,11 +217,16 @@ class Controller:
             targets=np.asarray(targets),
         )
 
-    def _margins(self, f_n: float, l_h: float) -> np.ndarray:
+    def _margins(self, f_n: float, state: ControlInput) -> np.ndarray:
+        """Per-row margins ``b − margin``: strict inequalities for the rows the command keeps."""
         p = self.params
         force = max(f_n, 0.0)
-        margins = np.full(N_CONE_ROWS, p.friction_margin * force)
-        margins[[Row.HAND_PIVOT_POS, Row.HAND_PIVOT_NEG]] = p.torque_margin * l_h * force
-        floor = np.full(N_CONE_ROWS, p.min_margin)
-        floor[[Row.HAND_PIVOT_POS, Row.HAND_PIVOT_NEG]] = p.min_margin * l_h
-        return np.maximum(margins, floor)
+        mu_h = -state.cone_rows[Row.HAND_SLIDE_POS, 0]  # the row is (−μ̂_h, −1, 0)
+        margins = np.full(N_CONE_ROWS, p.ground_margin)
+        margins[[Row.HAND_SLIDE_POS, Row.HAND_SLIDE_NEG]] = max(
+            p.friction_margin * mu_h * force, p.min_margin
+        )
+        margins[[Row.HAND_PIVOT_POS, Row.HAND_PIVOT_NEG]] = (
+            max(p.torque_margin * force, p.min_margin) * state.l_h
+        )
+        return margins

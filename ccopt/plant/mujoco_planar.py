@@ -9,6 +9,7 @@ centre, in world axes; gravity is compensated.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import mujoco
@@ -78,6 +79,47 @@ def planar_model_xml(obj: PlanarObject, params: PlantParams) -> str:
     )
 
 
+def _placed_object(obj: PlanarObject, start: StartConfig) -> tuple[np.ndarray, float, np.ndarray]:
+    """Object pose, ``d`` and the hand face's end points (world) of a start configuration."""
+    face = obj.face_index(start.hand_face)
+    normal = obj.face_normal(face)
+    angle = start.theta_o + 0.5 * math.pi - math.atan2(normal[1], normal[0])
+    rotated = geometry.transform_points(obj.vertices, (0.0, 0.0, angle))
+    lowest = rotated[lowest_vertex(rotated)]
+    centroid = np.array([start.x_o, 0.0]) - lowest
+    object_pose = np.array([centroid[0], centroid[1], angle])
+    r_o = np.array([start.x_o, 0.0])
+    face_ends = np.array([rotated[face], rotated[(face + 1) % obj.n_faces]]) + centroid
+    d = float((r_o - face_ends[0]) @ geometry.hand_normal(start.theta_o))
+    return object_pose, d, face_ends
+
+
+def face_s_h_range(obj: PlanarObject, start: StartConfig) -> tuple[float, float]:
+    """Range of ``s_h`` (m) that keeps the hand centre on the start face (``start.s_h`` ignored)."""
+    _, _, face_ends = _placed_object(obj, start)
+    along = sorted(
+        float((np.array([start.x_o, 0.0]) - p) @ geometry.hand_tangent(start.theta_o)) for p in face_ends
+    )
+    return along[0], along[1]
+
+
+def hand_over_vertex(obj: PlanarObject, start: StartConfig, half_length: float) -> StartConfig:
+    """``start`` with ``s_h`` as close to 0 as the whole hand allows (m).
+
+    ``s_h = 0`` puts the hand centre straight over the ground contact along ``e_n``, where the normal
+    push has no moment about the contact (the paper's Fig. 2a); the hand is kept ``half_length`` plus
+    2 mm inside the face's ends, so it lies flush over its whole length.
+    """
+    low, high = face_s_h_range(obj, start)
+    inset = half_length + 2e-3
+    if high - low < 2.0 * inset:
+        raise ValueError(
+            f"face {obj.face_index(start.hand_face)} of {obj.name} ({high - low:.3f} m) is shorter "
+            f"than the hand ({2.0 * half_length:.3f} m)"
+        )
+    return dataclasses.replace(start, s_h=float(np.clip(0.0, low + inset, high - inset)))
+
+
 def start_poses(
     obj: PlanarObject, start: StartConfig, params: PlantParams
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -91,26 +133,16 @@ def start_poses(
         ValueError: the face does not exist, the hand centre is off the face, or the hand would
             cut the ground.
     """
-    face = obj.face_index(start.hand_face)
-    normal = obj.face_normal(face)
-    angle = start.theta_o + 0.5 * math.pi - math.atan2(normal[1], normal[0])
-    rotated = geometry.transform_points(obj.vertices, (0.0, 0.0, angle))
-    lowest = rotated[lowest_vertex(rotated)]
-    centroid = np.array([start.x_o, 0.0]) - lowest
-    object_pose = np.array([centroid[0], centroid[1], angle])
-
+    object_pose, d, _ = _placed_object(obj, start)
     r_o = np.array([start.x_o, 0.0])
     e_n = geometry.hand_normal(start.theta_o)
     e_t = geometry.hand_tangent(start.theta_o)
-    face_start, face_end = rotated[face] + centroid, rotated[(face + 1) % obj.n_faces] + centroid
-    d = float((r_o - face_start) @ e_n)
     hand_pose = geometry.hand_pose_from_contact(start.theta_o, start.s_h, d, r_o)
-
-    along = sorted(float((p - hand_pose[:2]) @ e_t) for p in (face_start, face_end))
-    if not along[0] - 1e-9 <= 0.0 <= along[1] + 1e-9:
+    low, high = face_s_h_range(obj, start)
+    if not low - 1e-9 <= start.s_h <= high + 1e-9:
         raise ValueError(
-            f"s_h = {start.s_h} m puts the hand centre off face {face} of {obj.name} "
-            f"(admissible s_h: [{start.s_h - along[1]:.4f}, {start.s_h - along[0]:.4f}] m)"
+            f"s_h = {start.s_h} m puts the hand centre off face {obj.face_index(start.hand_face)} of "
+            f"{obj.name} (admissible s_h: [{low:.4f}, {high:.4f}] m)"
         )
     corners = [
         hand_pose[:2] + a * params.l_h * e_t - b * params.hand_thickness * e_n
@@ -120,7 +152,7 @@ def start_poses(
     if min(c[1] for c in corners) < 0.0:
         raise ValueError(
             f"the hand would cut the ground at theta_o = {start.theta_o} rad, s_h = {start.s_h} m "
-            f"on face {face} of {obj.name}"
+            f"on face {obj.face_index(start.hand_face)} of {obj.name}"
         )
     offset = start.normal_force * e_n / np.asarray(params.K[:2])
     target = hand_pose + np.array([offset[0], offset[1], 0.0])
