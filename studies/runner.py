@@ -1,0 +1,362 @@
+"""The machinery every study shares: trial specs fanned out through an executor, written as they finish.
+
+A study is
+
+* a list of **trial specs**: small frozen dataclasses (or dicts) of JSON-serialisable fields; a
+  trial that draws random numbers carries its own ``seed`` (see :func:`trial_seeds`);
+* a pure, top-level (picklable) **trial function** ``trial(spec) -> dict`` of JSON-serialisable
+  numbers (lists of numbers allowed);
+* a summary step: a table printed at the end, figures, :func:`write_results`.
+
+:func:`run_trials` runs the trials through a :mod:`concurrent.futures` executor — in process for one
+worker, a :class:`~concurrent.futures.ProcessPoolExecutor` (``spawn``) for several, or a Dask
+distributed cluster when a scheduler address is given — and returns the results in spec order. A trial
+that raises becomes ``{"error": "<one line>"}``. Every finished trial is appended at once to
+``trials.jsonl`` in the study's folder, so an interrupted study keeps what it finished.
+
+Trial functions may run in several threads of one Dask worker at once: per-process state that is not
+thread-safe (CasADi buffers, parametrised cvxpy problems, simulators) belongs in a
+:func:`thread_cached` builder.
+
+Each study module has ``main(argv) -> int``; :func:`study_modules` is the registry behind
+``python -m studies NAME``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import dataclasses
+import functools
+import json
+import multiprocessing
+import os
+import re
+import sys
+import threading
+import time
+import traceback
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
+from contextlib import contextmanager
+from dataclasses import dataclass
+from enum import Enum
+from pathlib import Path
+from typing import Any, TypeVar
+
+import numpy as np
+from tqdm import tqdm
+
+from ccopt.cliutil import OneLineParser, fail, write_json
+
+Spec = Any
+"""A trial spec: a dataclass instance or a dict, JSON-serialisable once through :func:`spec_dict`."""
+
+Trial = Callable[[Spec], dict]
+T = TypeVar("T")
+
+TRIALS_LOG = "trials.jsonl"
+SCHEDULER_TIMEOUT = "10s"
+"""How long to wait for a Dask scheduler before giving up."""
+
+
+def study_modules() -> dict[str, str]:
+    """Study name (as typed after ``python -m studies``) → module with a ``main(argv) -> int``."""
+    return {
+        "feasibility": "studies.feasibility",
+        "qp-region": "studies.qp_region",
+        "gradients": "studies.gradients",
+    }
+
+
+# --- command line ---------------------------------------------------------------------------------
+
+
+def default_workers() -> int:
+    """``min(2, cpu count)``: studies share small machines."""
+    return min(2, os.cpu_count() or 1)
+
+
+def positive_int(value: str) -> int:
+    """argparse type: an integer ≥ 1."""
+    try:
+        number = int(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{value!r} is not an integer") from None
+    if number < 1:
+        raise argparse.ArgumentTypeError(f"{value!r} must be at least 1")
+    return number
+
+
+def scheduler_address(value: str) -> str:
+    """argparse type: a Dask scheduler address ``[tcp|tls]://host:port`` (``host:port`` means tcp)."""
+    address = value if "://" in value else f"tcp://{value}"
+    match = re.fullmatch(r"(tcp|tls)://([^\s:/]+|\[[0-9a-fA-F:]+\]):(\d{1,5})", address)
+    if match is None or not 0 < int(match.group(3)) < 65536:
+        raise argparse.ArgumentTypeError(f"{value!r} is not a scheduler address like tcp://127.0.0.1:8786")
+    return address
+
+
+def output_folder(value: str) -> Path:
+    """argparse type: a folder that exists or can be created (checked before any work is done)."""
+    path = Path(value)
+    if path.exists() and not path.is_dir():
+        raise argparse.ArgumentTypeError(f"{value!r} exists and is not a folder")
+    existing = next(p for p in (path, *path.parents) if p.exists()) if path.parts else Path(".")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise argparse.ArgumentTypeError(f"cannot write into {str(existing)!r}")
+    return path
+
+
+def study_parser(name: str, description: str, trials: bool = True) -> OneLineParser:
+    """The parser of study ``name`` with the shared options; the study adds its own.
+
+    ``--out DIR`` (default ``runs/study-NAME``) always; with ``trials``, also ``--workers N``
+    (default :func:`default_workers`), ``--scheduler ADDRESS``, ``--seed`` and ``--no-progress``.
+    Bad values end the program with one line on stderr and exit status 2.
+    """
+    parser = OneLineParser(prog=f"python -m studies {name}", description=description)
+    parser.add_argument(
+        "--out",
+        type=output_folder,
+        default=Path(f"runs/study-{name}"),
+        metavar="DIR",
+        help="output folder, created (default: %(default)s)",
+    )
+    if trials:
+        parser.add_argument(
+            "--workers",
+            type=positive_int,
+            default=default_workers(),
+            metavar="N",
+            help="local worker processes; 1 runs in this process (default: %(default)s)",
+        )
+        parser.add_argument(
+            "--scheduler",
+            type=scheduler_address,
+            metavar="ADDRESS",
+            help="run the trials on the Dask cluster at this address, e.g. tcp://127.0.0.1:8786",
+        )
+        parser.add_argument("--seed", type=int, default=0, help="base seed of the trials (default: 0)")
+        parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    return parser
+
+
+@dataclass(frozen=True)
+class RunOptions:
+    """How to run a study's trials (from the shared command-line options)."""
+
+    out: Path
+    workers: int = 1
+    scheduler: str | None = None
+    progress: bool = True
+
+    @classmethod
+    def from_args(cls, args: argparse.Namespace) -> RunOptions:
+        return cls(
+            out=args.out, workers=args.workers, scheduler=args.scheduler, progress=not args.no_progress
+        )
+
+
+# --- specs and results ----------------------------------------------------------------------------
+
+
+def trial_seeds(seed: int, count: int) -> list[int]:
+    """``count`` independent 32-bit seeds derived from one base ``seed`` (NumPy ``SeedSequence``)."""
+    return [int(child.generate_state(1)[0]) for child in np.random.SeedSequence(seed).spawn(count)]
+
+
+def spec_dict(spec: Spec) -> dict[str, Any]:
+    """A spec as a JSON-ready dict: dataclass fields, enums by value, tuples as lists."""
+    fields = dataclasses.asdict(spec) if dataclasses.is_dataclass(spec) else dict(spec)
+    return {key: json_ready(value) for key, value in fields.items()}
+
+
+def json_ready(value: Any) -> Any:
+    """``value`` with enums by value, tuples and arrays as lists, NumPy scalars as Python numbers and
+    non-finite floats as ``None`` (strict JSON), recursively."""
+    if isinstance(value, Enum):
+        return value.value
+    if isinstance(value, dict):
+        return {str(k): json_ready(v) for k, v in value.items()}
+    if isinstance(value, list | tuple | np.ndarray):
+        return [json_ready(v) for v in value]
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, float) and not np.isfinite(value):
+        return None
+    return value
+
+
+def error_line(error: BaseException) -> str:
+    """``Type: message``, a multi-line message joined into one line."""
+    lines = traceback.format_exception_only(type(error), error)
+    text = " ".join(line.strip() for line in lines if line.strip())
+    return " ".join(text.split())
+
+
+def _timed_trial(function: Trial, spec: Spec) -> tuple[dict, float]:
+    """Run one trial where it is scheduled; an exception becomes an error row (never a crash)."""
+    start = time.perf_counter()
+    try:
+        result = json_ready(dict(function(spec)))
+    except Exception as error:  # a failing trial is data, not the end of the study
+        result = {"error": error_line(error)}
+    return result, time.perf_counter() - start
+
+
+_THREAD_STATE = threading.local()
+
+
+def thread_cached(build: Callable[..., T]) -> Callable[..., T]:
+    """Decorator: call ``build(*args)`` once per thread and argument tuple, then reuse its result.
+
+    Like :func:`functools.cache`, but each thread (each concurrent trial on a Dask worker) gets its
+    own object, for state that must not be shared: buffers, solvers with parameter values, plants.
+    """
+
+    @functools.wraps(build)
+    def cached(*args: Any) -> T:
+        store = _THREAD_STATE.__dict__.setdefault("store", {})
+        key = (build, args)
+        if key not in store:
+            store[key] = build(*args)
+        return store[key]
+
+    return cached
+
+
+# --- executors ------------------------------------------------------------------------------------
+
+
+@contextmanager
+def _executor(workers: int, scheduler: str | None) -> Iterator[Executor]:
+    """A Dask cluster's executor when ``scheduler`` is given, else a pool of ``workers`` processes."""
+    if scheduler is not None:
+        try:
+            from distributed import Client
+        except ImportError:
+            raise RuntimeError("--scheduler needs Dask: pip install 'ccopt[dask]'") from None
+        with Client(scheduler, timeout=SCHEDULER_TIMEOUT) as client:
+            yield client.get_executor(pure=False)
+        return
+    # spawn: workers start clean (no forked threads or CasADi buffers), as they would on any OS
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+    try:
+        yield pool
+    except BaseException:  # Ctrl-C or a failed write: do not wait for long trials to finish
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
+
+
+def _completed(
+    function: Trial, specs: Sequence[Spec], workers: int, scheduler: str | None
+) -> Iterator[tuple[int, dict, float]]:
+    """``(index, result, seconds)`` of each trial as it finishes; in process for one local worker."""
+    if scheduler is None and workers == 1:
+        for k, spec in enumerate(specs):
+            yield k, *_timed_trial(function, spec)
+        return
+    with _executor(workers, scheduler) as executor:
+        futures = {executor.submit(_timed_trial, function, spec): k for k, spec in enumerate(specs)}
+        for future in as_completed(futures):
+            try:
+                result, seconds = future.result()
+            except Exception as error:  # the worker itself died (killed, out of memory, lost)
+                result, seconds = {"error": error_line(error)}, float("nan")
+            yield futures[future], result, seconds
+
+
+def run_trials(
+    function: Trial,
+    specs: Sequence[Spec],
+    workers: int = 1,
+    scheduler: str | None = None,
+    progress: bool = True,
+    log: Path | None = None,
+) -> list[dict]:
+    """Run ``function`` on every spec and return the results in spec order.
+
+    Args:
+        function: a top-level (picklable) ``trial(spec) -> dict``.
+        specs: the trial specs.
+        workers: local processes; 1 runs the trials one by one in this process (no pool). Ignored
+            when ``scheduler`` is given.
+        scheduler: a Dask scheduler address; the trials then run on that cluster.
+        progress: show a tqdm bar over completed trials (stderr).
+        log: a ``trials.jsonl`` to append each finished trial to, as it finishes:
+            ``{"index", "spec", "result", "seconds"}`` per line.
+
+    A trial that raises yields ``{"error": "<one line>"}``. Raises ``RuntimeError`` if ``scheduler``
+    is given but Dask is not installed, ``OSError`` (``TimeoutError``) if the scheduler is unreachable.
+    """
+    if workers < 1:
+        raise ValueError(f"workers must be at least 1, got {workers}")
+    results: dict[int, dict] = {}
+    with tqdm(total=len(specs), disable=not progress, unit="trial", dynamic_ncols=True) as bar:
+        for k, result, seconds in _completed(function, specs, workers, scheduler):
+            results[k] = result
+            if log is not None:
+                record = {"index": k, "spec": spec_dict(specs[k]), "result": result, "seconds": seconds}
+                _append_line(log, record)
+            bar.update()
+    return [results[k] for k in range(len(specs))]
+
+
+def _append_line(path: Path, record: dict) -> None:
+    with open(path, "a") as stream:
+        stream.write(json.dumps(json_ready(record)) + "\n")
+        stream.flush()
+
+
+def run_study(prog: str, function: Trial, specs: Sequence[Spec], options: RunOptions) -> list[dict]:
+    """:func:`run_trials` for a study's command line, into ``options.out`` (created) and a fresh log.
+
+    An unreachable scheduler or an unwritable folder ends the program with one line (exit 2); Ctrl-C
+    with one line (exit 130), the finished trials kept in ``trials.jsonl``.
+    """
+    log = options.out / TRIALS_LOG
+    try:
+        options.out.mkdir(parents=True, exist_ok=True)
+        log.write_text("")
+        return run_trials(function, specs, options.workers, options.scheduler, options.progress, log)
+    except (OSError, TimeoutError, RuntimeError) as error:
+        fail(prog, error_line(error))
+    except KeyboardInterrupt:
+        sys.stderr.write(f"{prog}: interrupted; finished trials are in {log}\n")
+        raise SystemExit(130) from None
+
+
+def read_trials(path: Path) -> list[dict]:
+    """The records of a ``trials.jsonl`` (finished trials, in completion order)."""
+    with open(path) as stream:
+        return [json.loads(line) for line in stream if line.strip()]
+
+
+def write_results(out: Path, specs: Sequence[Spec], results: Sequence[dict], summary: dict) -> None:
+    """``results.json`` (summary and every trial) and ``results.csv`` (one row per trial) in ``out``.
+
+    CSV columns are the spec's fields then the result's; list values are written as JSON.
+    """
+    rows = [{**spec_dict(spec), **json_ready(result)} for spec, result in zip(specs, results, strict=True)]
+    write_json(
+        out / "results.json",
+        {
+            "summary": json_ready(summary),
+            "trials": [
+                {"spec": spec_dict(s), "result": json_ready(r)} for s, r in zip(specs, results, strict=True)
+            ],
+        },
+    )
+    columns = list(dict.fromkeys(key for row in rows for key in row))
+    with open(out / "results.csv", "w", newline="") as stream:
+        writer = csv.DictWriter(stream, fieldnames=columns)
+        writer.writeheader()
+        for row in rows:
+            writer.writerow({k: json.dumps(v) if isinstance(v, list | dict) else v for k, v in row.items()})
+
+
+def failures(results: Sequence[dict]) -> list[tuple[int, str]]:
+    """``(index, message)`` of the trials that raised."""
+    return [(k, r["error"]) for k, r in enumerate(results) if "error" in r]
