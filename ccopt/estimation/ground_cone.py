@@ -1,0 +1,319 @@
+"""Ground friction constraints from an online convex hull of the hand force (paper §IV-A).
+
+The ground rows of the generalized friction cone (:data:`ccopt.contact.ground_rows_world`) are two
+half-planes ``a·f ≤ b`` on the world hand force ``f = (f_x, f_y)``: with ``F = f + f_grav`` the
+object's net force, the ground blocks sliding while ``F·t_g + μ_g F·n_g ≤ 0`` and
+``−F·t_g + μ_g F·n_g ≤ 0`` (``t_g``, ``n_g`` the ground tangent and upward normal). The mass is unknown,
+so the rows are learned directly in force space: a cone opening downwards (towards ``−n_g``) with its
+apex at ``−f_grav = (0, m g)``, whose right face (outward normal ``∝ t_g + μ_g n_g``) is the row
+``GROUND_SLIDE_POS`` and left face (``∝ −t_g + μ_g n_g``) is ``GROUND_SLIDE_NEG``.
+
+Every measured hand force satisfies both rows, so the convex hull of the measurements is a
+conservative (inner) estimate of the cone. It is tracked through its support values
+``h_k = quantile_p(u_k·f)`` in ``K`` fixed directions ``u_k`` (streaming P², so a few outliers do
+not inflate it). A fit every ``refit_interval`` then
+
+1. intersects the half-planes ``u_k·f ≤ h_k`` (dropping those that do not touch the polygon);
+2. takes the "up" direction of the cone as the direction from the polygon's centroid to the origin
+   (the hand force is small at the top of the data and grows down the cone);
+3. on each side of "up", finds the friction face: a straight face of the hull with outward normal
+   ``ν`` is cut by the sampled directions into two polygon edges (those of the two directions
+   around ``ν``), so the face is the longest pair of consecutive edges whose first normal points
+   to that side, neither nearly up (the hull's top) nor down (its bottom, :data:`FACE_COSINE_RANGE`);
+   its chord (first vertex to last) gives the row.
+
+Rows are returned with unit normals ``a`` (so ``b − a·f`` is the distance to the face in N) in the
+order of :data:`ccopt.contact.GROUND_ROWS`. They are *valid* once ``min_samples`` forces have been
+seen. A side whose longest pair is shorter than ``min_face_length`` (no sliding seen that way yet)
+gets a conservative row instead, with the prior friction slope ``μ_prior`` about "up", touching the
+hull. ``μ_g`` follows from the angle between fitted faces: ``μ_g = cot(∠(a₊, a₋)/2)``, whatever
+the ground's tilt, and their intersection (the apex) is the object's weight reversed.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+from ccopt import geometry
+from ccopt.estimation.quantile import P2QuantileBank, check_count, check_level, check_number
+
+WORLD_UP = np.array([0.0, 1.0])
+_MIN_AREA = 1e-6
+"""Hulls of smaller area (N²) have no meaningful centroid."""
+_TIME_TOLERANCE = 1e-9
+"""Intervals are compared with this slack (s), so that sample times with rounding errors still count."""
+FACE_COSINE_RANGE = (-0.2, math.cos(math.radians(15.0)))
+"""``up·ν`` of a friction face's outward normal ``ν``: it is ``sin(atan μ_g) ∈ (0, 1)``; faces within
+15° of "up" (μ_g > 3.7) are the hull's top, where the force is smallest, and faces more than ~12°
+below the horizontal its bottom."""
+FACE_WINDOW_STEPS = 2.1
+"""A face's polygon edges have normals within this many direction steps of the face's normal."""
+
+
+@dataclass(frozen=True)
+class GroundConeParams:
+    """Parameters of the ground friction hull.
+
+    Attributes:
+        directions: number ``K`` of support directions, evenly spaced (≥ 8).
+        level: quantile level of each support value. The fraction of samples above it must be
+            well above the fraction of outliers beyond the hull in any direction: P² interpolates
+            across the gap between data and outliers, and with 1 % outliers a level of 0.99
+            occasionally put a support line several N outside the data; 0.985 never did.
+        min_samples: forces seen before the rows count as estimated.
+        min_face_length: shortest chord accepted as a friction face (N).
+        mu_prior: friction slope of the conservative rows used before a face is seen (> 0).
+        sample_interval: shortest time between two forces fed to the hull (s). The support
+            quantiles need many forces, not consecutive ones: at 1 kHz neighbouring samples are
+            nearly equal, and feeding one in four (4 ms) keeps the hull's cost off most updates.
+        refit_interval: time between two fits of the faces (s).
+    """
+
+    directions: int = 64
+    level: float = 0.985
+    min_samples: int = 200
+    min_face_length: float = 3.0
+    mu_prior: float = 0.1
+    sample_interval: float = 0.004
+    refit_interval: float = 0.025
+
+    def __post_init__(self) -> None:
+        check_count("directions", self.directions, low=8)
+        check_level(self.level)
+        check_count("min_samples", self.min_samples)
+        check_number("min_face_length", self.min_face_length)
+        check_number("mu_prior", self.mu_prior)
+        check_number("sample_interval", self.sample_interval, low_open=False)
+        check_number("refit_interval", self.refit_interval, low_open=False)
+
+
+@dataclass(frozen=True)
+class GroundCone:
+    """The estimated ground rows ``A f ≤ b`` on the world hand force (N), rows in ``GROUND_ROWS`` order.
+
+    Attributes:
+        A: 2×2, unit rows: ``GROUND_SLIDE_POS`` (right face), ``GROUND_SLIDE_NEG`` (left face).
+        b: 2, offsets (N).
+        valid: True once enough forces back the rows (both rows share it).
+        fitted: per row, True if it is a fitted friction face, False if the conservative prior row.
+        mu_g: ``cot(∠(a₊, a₋)/2)`` if both faces are fitted, else NaN.
+        apex: intersection of the two rows (N, ``(0, m g)`` for a horizontal ground) if both faces
+            are fitted, else NaN.
+        up: the cone's "up" direction (unit, world): the bisector of the faces' normals if both
+            are fitted, else the rough direction used to tell left from right.
+    """
+
+    A: np.ndarray
+    b: np.ndarray
+    valid: bool
+    fitted: tuple[bool, bool]
+    mu_g: float
+    apex: np.ndarray
+    up: np.ndarray
+
+
+class GroundConeEstimator:
+    """Streaming ground-friction hull of the world hand force (see the module docstring)."""
+
+    def __init__(self, params: GroundConeParams | None = None) -> None:
+        self.params = params if params is not None else GroundConeParams()
+        angles = 2.0 * np.pi * np.arange(self.params.directions) / self.params.directions
+        self.directions = np.column_stack((np.cos(angles), np.sin(angles)))
+        self._support = P2QuantileBank(self.params.level, self.params.directions)
+        self._last_sample = -math.inf
+        self._last_fit = -math.inf
+        self.cone = fit_ground_cone(self.directions, np.full(self.params.directions, np.nan), self.params, 0)
+
+    @property
+    def sample_count(self) -> int:
+        """Forces accepted so far."""
+        return self._support.count
+
+    def update(self, time: float, force_world: np.ndarray) -> None:
+        """Offer the world hand force ``(f_x, f_y)`` (N) measured at ``time`` (s).
+
+        It is added if ``sample_interval`` has passed since the last force added (or time went
+        back) and it is finite; the faces are refitted when ``refit_interval`` has passed.
+        """
+        params = self.params
+        if not (
+            time - self._last_sample >= params.sample_interval - _TIME_TOLERANCE or time < self._last_sample
+        ):
+            return
+        self._last_sample = time
+        self._support.add(self.directions @ force_world)
+        if time - self._last_fit >= params.refit_interval - _TIME_TOLERANCE or time < self._last_fit:
+            self._last_fit = time
+            self.refit()
+
+    def refit(self) -> GroundCone:
+        """Fit the rows to the current support values now; returns (and stores) :attr:`cone`."""
+        self.cone = fit_ground_cone(self.directions, self._support.values, self.params, self.sample_count)
+        return self.cone
+
+
+def fit_ground_cone(
+    directions: np.ndarray, support: np.ndarray, params: GroundConeParams, sample_count: int
+) -> GroundCone:
+    """The ground rows from support values ``support[k] = h(directions[k])`` (see the module docstring)."""
+    if sample_count == 0 or not np.all(np.isfinite(support)):
+        world_up = (float(WORLD_UP[0]), float(WORLD_UP[1]))
+        return _cone(_prior_rows(world_up, params.mu_prior, [(0.0, 0.0)]), False, world_up, (False, False))
+    active, vertices = half_plane_polygon(directions, support)
+    up = _cone_up(vertices)
+    rows = _prior_rows(up, params.mu_prior, vertices)
+    edges = _edges(directions[active].tolist(), vertices)
+    fitted = [False, False]
+    for index, side in enumerate((1.0, -1.0)):
+        face = _friction_face(edges, vertices, up, side, FACE_WINDOW_STEPS * 2.0 * math.pi / len(directions))
+        if face is not None and face[2] >= params.min_face_length:
+            rows[index], fitted[index] = face, True
+    return _cone(rows, sample_count >= params.min_samples, up, (fitted[0], fitted[1]))
+
+
+Row2 = tuple[tuple[float, float], float, float]
+"""A ground row as ``(unit normal, offset (N), face length (N))``."""
+
+
+def half_plane_polygon(
+    directions: np.ndarray, support: np.ndarray
+) -> tuple[list[int], list[tuple[float, float]]]:
+    """Intersection of the half-planes ``directions[k]·f ≤ support[k]`` (directions by ascending angle,
+    spanning the circle so that it is bounded).
+
+    Returns the indices of the half-planes that touch the polygon, in counter-clockwise order, and
+    its vertices: vertex ``i`` is where active lines ``i`` and ``i + 1`` (cyclically) meet, so edge
+    ``i`` runs from vertex ``i − 1`` to vertex ``i``. The classic sorted-angle deque sweep, O(K).
+    """
+    ux, uy, h = directions[:, 0].tolist(), directions[:, 1].tolist(), support.tolist()
+
+    def corner(i: int, j: int) -> tuple[float, float]:
+        det = ux[i] * uy[j] - uy[i] * ux[j]
+        return (uy[j] * h[i] - uy[i] * h[j]) / det, (ux[i] * h[j] - ux[j] * h[i]) / det
+
+    def outside(k: int, point: tuple[float, float]) -> bool:
+        return ux[k] * point[0] + uy[k] * point[1] > h[k]
+
+    lines: deque[int] = deque()  # active lines, by angle
+    corners: deque[tuple[float, float]] = deque()  # corners[i]: lines[i] meets lines[i + 1]
+    for k in range(len(h)):
+        while corners and outside(k, corners[-1]):
+            lines.pop()
+            corners.pop()
+        while corners and outside(k, corners[0]):
+            lines.popleft()
+            corners.popleft()
+        if lines:
+            corners.append(corner(lines[-1], k))
+        lines.append(k)
+    while len(corners) >= 2 and outside(lines[0], corners[-1]):
+        lines.pop()
+        corners.pop()
+    while len(corners) >= 2 and outside(lines[-1], corners[0]):
+        lines.popleft()
+        corners.popleft()
+    corners.append(corner(lines[-1], lines[0]))
+    return list(lines), list(corners)
+
+
+def _cone(rows: list[Row2], valid: bool, up: tuple[float, float], fitted: tuple[bool, bool]) -> GroundCone:
+    normals = np.array([row[0] for row in rows])
+    offsets = np.array([row[1] for row in rows])
+    mu_g, apex = math.nan, np.full(2, np.nan)
+    if all(fitted):
+        (ax, ay), (cx, cy) = rows[0][0], rows[1][0]
+        up = (ax + cx, ay + cy)  # the faces' bisector: the cone's axis
+        up = (up[0] / math.hypot(*up), up[1] / math.hypot(*up))
+        mu_g = 1.0 / math.tan(0.5 * math.acos(max(-1.0, min(1.0, ax * cx + ay * cy))))
+        det = ax * cy - ay * cx
+        if det != 0.0:
+            apex = np.array([cy * offsets[0] - ay * offsets[1], ax * offsets[1] - cx * offsets[0]]) / det
+    up_array = np.array(up)
+    for array in (normals, offsets, apex, up_array):
+        array.flags.writeable = False
+    return GroundCone(A=normals, b=offsets, valid=valid, fitted=fitted, mu_g=mu_g, apex=apex, up=up_array)
+
+
+def _prior_rows(up: tuple[float, float], mu_prior: float, vertices: list[tuple[float, float]]) -> list[Row2]:
+    """Rows of slope ``mu_prior`` about ``up`` (right face first) touching the polygon ``vertices``."""
+    scale = math.hypot(1.0, mu_prior)
+    rows = []
+    for side in (1.0, -1.0):
+        normal = ((side * up[1] + mu_prior * up[0]) / scale, (-side * up[0] + mu_prior * up[1]) / scale)
+        offset = max(normal[0] * x + normal[1] * y for x, y in vertices)
+        rows.append((normal, offset, 0.0))
+    return rows
+
+
+def _cone_up(vertices: list[tuple[float, float]]) -> tuple[float, float]:
+    """Unit vector from the hull's area centroid to the origin; world up if that is undefined."""
+    polygon = np.array(vertices)
+    if len(vertices) >= 3 and abs(geometry.signed_area(polygon)) > _MIN_AREA:
+        x, y = geometry.centroid(polygon).tolist()
+        norm = math.hypot(x, y)
+        if norm > 0.0:
+            return -x / norm, -y / norm
+    return float(WORLD_UP[0]), float(WORLD_UP[1])
+
+
+def _edges(
+    normals: list[list[float]], vertices: list[tuple[float, float]]
+) -> list[tuple[float, float, float]]:
+    """Per polygon edge ``i`` (from vertex ``i − 1`` to ``i``, on line ``normals[i]``): normal and length."""
+    return [
+        (normal[0], normal[1], math.dist(vertices[index - 1], vertices[index]))
+        for index, normal in enumerate(normals)
+    ]
+
+
+def _friction_face(
+    edges: list[tuple[float, float, float]],
+    vertices: list[tuple[float, float]],
+    up: tuple[float, float],
+    side: float,
+    window: float,
+) -> Row2 | None:
+    """The friction face on ``side`` (+1 right, −1 left of ``up``) as a row, or None.
+
+    Seed: the longest pair of consecutive edges whose first normal points to that side with
+    ``up·ν`` in :data:`FACE_COSINE_RANGE`. Noise lifts the support values most where the face is
+    seen head-on, so the hull bulges slightly along a face and a straight face spans a few edges:
+    the face is every consecutive edge whose normal is within ``window`` (rad) of the seed chord's,
+    and the row is the chord from the first one's start to the last one's end — the face's ends.
+    """
+    right = (side * up[1], -side * up[0])
+    low, high = FACE_COSINE_RANGE
+    count, best, first = len(edges), 0.0, -1
+    for index, (nx, ny, length) in enumerate(edges):
+        pair = length + edges[(index + 1) % count][2]
+        if nx * right[0] + ny * right[1] > 0.0 and low <= nx * up[0] + ny * up[1] <= high and pair > best:
+            best, first = pair, index
+    seed = _chord(vertices[first - 1], vertices[(first + 1) % count]) if first >= 0 else None
+    if seed is None:
+        return None
+    cosine = math.cos(window)
+    start, end = first, first + 1
+    while end - start < count - 1 and _aligned(edges[(end + 1) % count], seed[0], cosine):
+        end += 1
+    while end - start < count - 1 and _aligned(edges[(start - 1) % count], seed[0], cosine):
+        start -= 1
+    return _chord(vertices[(start - 1) % count], vertices[end % count])
+
+
+def _aligned(edge: tuple[float, float, float], normal: tuple[float, float], cosine: float) -> bool:
+    return edge[0] * normal[0] + edge[1] * normal[1] >= cosine
+
+
+def _chord(start: tuple[float, float], end: tuple[float, float]) -> Row2 | None:
+    """The row of the line from ``start`` to ``end`` (outward normal for a counter-clockwise polygon),
+    None if they coincide."""
+    (sx, sy), (ex, ey) = start, end
+    length = math.hypot(ex - sx, ey - sy)
+    if length == 0.0:
+        return None
+    normal = ((ey - sy) / length, (sx - ex) / length)
+    return normal, normal[0] * sx + normal[1] * sy, length
