@@ -1,0 +1,154 @@
+"""Kinematic estimator on hand poses of a known object (ccopt.geometry.hand_pose_from_contact)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from ccopt import geometry
+from ccopt.estimation.kinematics import KinematicEstimator, KinematicsParams, pivot_contact
+from ccopt.modes import ContactConfiguration, ContactMode, HandGeometry
+
+D, R_O, S_H, L_H = 0.06, np.array([0.12, 0.01]), 0.015, 0.05
+POSE_NOISE = np.array([2e-4, 2e-4, math.radians(0.1)])  # m, m, rad
+STICK = ContactConfiguration()
+HAND_SLIDES = ContactConfiguration(hand_mode=ContactMode.SLIDE_POS)
+GROUND_SLIDES = ContactConfiguration(ground_mode=ContactMode.SLIDE_POS)
+
+
+def measured(pose: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    return pose + rng.normal(0.0, POSE_NOISE)
+
+
+def step(
+    estimator: KinematicEstimator,
+    pose: np.ndarray,
+    modes: ContactConfiguration = STICK,
+    in_contact: bool = True,
+):
+    theta = float(pose[2])
+    normal, tangent = geometry.hand_normal(theta).tolist(), geometry.hand_tangent(theta).tolist()
+    return estimator.update(pose, normal, tangent, modes, in_contact)
+
+
+def pivot_about_ground(estimator: KinematicEstimator, rng: np.random.Generator, span_deg: float = 15.0):
+    """Rotate the object (and the sticking, flush hand) about the ground contact by ±``span_deg``."""
+    angles = np.radians(span_deg) * np.sin(np.linspace(0.0, 2.0 * np.pi, 1200))
+    for theta in angles:
+        estimate = step(estimator, measured(geometry.hand_pose_from_contact(theta, S_H, D, R_O), rng))
+    return estimate
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_rigid_rotation_about_the_ground_contact_gives_d_and_r_o_within_a_millimetre(seed):
+    estimate = pivot_about_ground(KinematicEstimator(), np.random.default_rng(seed))
+    assert estimate.contact_valid and estimate.s_h_valid and estimate.theta_o_valid
+    assert abs(estimate.d - D) < 1e-3
+    assert np.all(np.abs(estimate.r_o - R_O) < 1e-3)
+    assert estimate.s_g == estimate.r_o[0]
+    assert abs(estimate.s_h - S_H) < 1e-3
+
+
+def test_estimates_are_invalid_until_the_hand_has_rotated_enough():
+    estimator, rng = KinematicEstimator(), np.random.default_rng(5)
+    for theta in np.radians(np.linspace(0.0, 1.0, 200)):
+        estimate = step(estimator, measured(geometry.hand_pose_from_contact(theta, S_H, D, R_O), rng))
+    assert estimate.theta_o_valid and estimate.theta_o == pytest.approx(math.radians(1.0), abs=0.01)
+    assert not estimate.contact_valid and not estimate.s_h_valid
+    assert math.isnan(estimate.d) and np.isnan(estimate.r_o).all()
+
+
+def test_the_papers_regression_alone_works_while_the_hand_slides():
+    estimator, rng = KinematicEstimator(), np.random.default_rng(6)
+    angles = np.radians(30.0) * np.sin(np.linspace(0.0, 2.0 * np.pi, 3000))
+    positions = S_H + 0.02 * np.sin(np.linspace(0.0, 6.0 * np.pi, 3000))
+    for theta, s_h in zip(angles, positions, strict=True):
+        pose = measured(geometry.hand_pose_from_contact(theta, s_h, D, R_O), rng)
+        estimate = step(estimator, pose, HAND_SLIDES)
+    assert estimate.contact_valid
+    assert abs(estimate.d - D) < 2e-3 and np.all(np.abs(estimate.r_o - R_O) < 2e-3)
+    assert abs(estimate.s_h - positions[-1]) < 2e-3
+
+
+def test_s_h_follows_a_hand_slide():
+    estimator, rng = KinematicEstimator(), np.random.default_rng(7)
+    pivot_about_ground(estimator, rng)
+    errors = []
+    for s_h in np.linspace(S_H, S_H + 0.03, 300):
+        pose = measured(geometry.hand_pose_from_contact(0.05, s_h, D, R_O), rng)
+        estimate = step(estimator, pose, HAND_SLIDES)
+        assert estimate.s_h_valid
+        errors.append(estimate.s_h - s_h)
+    assert np.mean(np.abs(errors)) < 5e-4 and np.max(np.abs(errors)) < 1.5e-3  # eq. 21, sample by sample
+    estimate = step(estimator, measured(geometry.hand_pose_from_contact(0.05, S_H + 0.03, D, R_O), rng))
+    assert abs(estimate.s_h - (S_H + 0.03)) < 1e-3
+    assert np.all(np.abs(estimate.r_o - R_O) < 1e-3)
+
+
+def test_a_ground_slide_moves_r_o_rigidly_with_the_hand():
+    estimator, rng = KinematicEstimator(), np.random.default_rng(8)
+    pivot_about_ground(estimator, rng)
+    for x_o in np.linspace(R_O[0], R_O[0] + 0.03, 300):
+        r_o = np.array([x_o, R_O[1]])
+        estimate = step(
+            estimator, measured(geometry.hand_pose_from_contact(0.1, S_H, D, r_o), rng), GROUND_SLIDES
+        )
+        assert estimate.contact_valid and np.all(np.abs(estimate.r_o - r_o) < 1e-3)
+    assert abs(estimate.s_h - S_H) < 1e-3 and abs(estimate.d - D) < 1e-3
+
+
+def hand_pivoting_on_its_end(theta_o: float, theta_h: float, sign: int, s_h: float = S_H) -> np.ndarray:
+    """Hand pose touching the object face (angle ``theta_o``) only with its ``sign`` end, whose
+    flush-hand equivalent is at ``s_h``."""
+    contact_point = geometry.hand_pose_from_contact(theta_o, s_h, D, R_O)[:2]
+    contact_point = contact_point + sign * L_H * geometry.hand_tangent(theta_o)
+    return np.array([*(contact_point - sign * L_H * geometry.hand_tangent(theta_h)), theta_h])
+
+
+@pytest.mark.parametrize("sign", [1, -1])
+def test_pivot_contact_inverts_the_pivoting_geometry(sign):
+    theta_o, theta_h = 0.2, 0.2 - sign * 0.08
+    pose = hand_pivoting_on_its_end(theta_o, theta_h, sign)
+    theta, s_h = pivot_contact(pose, sign, L_H, D, R_O, theta_h)
+    assert theta == pytest.approx(theta_o, abs=1e-12) and s_h == pytest.approx(S_H, abs=1e-12)
+
+
+def test_a_pivoting_hand_still_gives_theta_o_and_s_h():
+    # θ_o is only as good as the lever from the ground contact to the hand end: 0.3 mm / 90 mm ≈ 0.2°
+    estimator, rng = KinematicEstimator(KinematicsParams(half_length=L_H)), np.random.default_rng(9)
+    pivot_about_ground(estimator, rng)
+    pivoting = ContactConfiguration(hand_geometry=HandGeometry.PIVOT_POS)  # Δθ = θ_o − θ_h > 0
+    s_h = -0.04
+    for theta_o in np.radians(np.linspace(0.0, 6.0, 100)):
+        estimate = step(estimator, measured(hand_pivoting_on_its_end(theta_o, 0.0, 1, s_h), rng), pivoting)
+        assert estimate.theta_o_valid and abs(estimate.theta_o - theta_o) < math.radians(1.0)
+        assert estimate.s_h_valid and abs(estimate.s_h - s_h) < 1.5e-3
+
+
+def test_indeterminate_motion_resets_and_lost_contact_keeps_the_ground_contact():
+    estimator, rng = KinematicEstimator(), np.random.default_rng(10)
+    pivot_about_ground(estimator, rng)
+    pose = measured(geometry.hand_pose_from_contact(0.0, S_H, D, R_O), rng)
+    away = step(estimator, pose, in_contact=False)
+    assert away.contact_valid and not away.s_h_valid
+    both_slide = ContactConfiguration(hand_mode=ContactMode.SLIDE_NEG, ground_mode=ContactMode.SLIDE_POS)
+    reset = step(estimator, pose, both_slide)
+    assert not reset.contact_valid and not reset.s_h_valid and reset.theta_o_valid
+    assert max(reset.std) == pytest.approx(estimator.params.prior_std)
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "error"),
+    [
+        ("half_length", 0.0, ValueError),
+        ("excitation_angle", -0.1, ValueError),
+        ("position_noise", math.nan, ValueError),
+        ("prior_std", 0.0, ValueError),
+        ("valid_std", "1e-3", TypeError),
+    ],
+)
+def test_bad_parameters_raise_naming_the_field(field, value, error):
+    with pytest.raises(error, match=field):
+        KinematicsParams(**{field: value})
