@@ -1,0 +1,28 @@
+"""Object-agnostic estimation (paper §IV): friction cone, contact modes and kinematics from the hand
+wrench and pose alone. :class:`Estimator` is the entry point; the modules are its parts."""
+
+from ccopt.estimation.estimator import Estimate, Estimator, EstimatorParams, replay
+from ccopt.estimation.friction import HandFrictionEstimator, HandFrictionParams
+from ccopt.estimation.ground_cone import GroundCone, GroundConeEstimator, GroundConeParams
+from ccopt.estimation.kinematics import KinematicEstimate, KinematicEstimator, KinematicsParams
+from ccopt.estimation.mode import ModeClassifier, ModeParams
+from ccopt.estimation.quantile import P2Quantile, P2QuantileBank
+
+__all__ = [
+    "Estimate",
+    "Estimator",
+    "EstimatorParams",
+    "GroundCone",
+    "GroundConeEstimator",
+    "GroundConeParams",
+    "HandFrictionEstimator",
+    "HandFrictionParams",
+    "KinematicEstimate",
+    "KinematicEstimator",
+    "KinematicsParams",
+    "ModeClassifier",
+    "ModeParams",
+    "P2Quantile",
+    "P2QuantileBank",
+    "replay",
+]

@@ -1,0 +1,280 @@
+"""The object-agnostic estimator (paper §IV): an :class:`Estimator`, one :meth:`~Estimator.update` per sample.
+
+Each sample ``(time, hand_pose, hand_wrench)`` — the measured hand pose ``(x_h, y_h, θ_h)`` (world,
+m/rad) and hand wrench ``(f_n, f_t, τ)`` (hand frame, N and N·m, :mod:`ccopt.geometry`) — goes through
+
+1. the hand friction estimate (:mod:`.friction`) and the ground friction hull (:mod:`.ground_cone`),
+   fed while the hand is in contact (``f_n > contact_force``);
+2. the generalized friction cone ``N w ≤ b`` in the hand frame (:data:`ccopt.contact.cone_rows`,
+   evaluated once per sample through one flat buffer, the same function as
+   :func:`ccopt.contact.friction_cone` at a fraction of its call overhead) and its margins ``b − N w``;
+3. the mode classifier (:mod:`.mode`) on those margins;
+4. the kinematic estimator (:mod:`.kinematics`) under the classified modes.
+
+Samples with a non-finite pose or wrench (sensor dropouts) change nothing: the previous estimate is
+returned with the new time and ``skipped=True``. A recording of ``(time, hand_pose, hand_wrench)`` can
+be replayed with :func:`replay`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ccopt import contact, geometry
+from ccopt.casadi_eval import BufferedFunction
+from ccopt.contact import N_CONE_ROWS
+from ccopt.estimation.friction import HandFrictionEstimator, HandFrictionParams
+from ccopt.estimation.ground_cone import GroundCone, GroundConeEstimator, GroundConeParams
+from ccopt.estimation.kinematics import KinematicEstimator, KinematicsParams
+from ccopt.estimation.mode import ModeClassifier, ModeParams
+from ccopt.estimation.quantile import check_number
+from ccopt.modes import ContactConfiguration, ContactMode, HandGeometry
+
+
+def _flat_cone_rows() -> BufferedFunction:
+    """:data:`ccopt.contact.cone_rows` and the margins ``b − N w`` on one flat input
+    ``(θ_h, μ_h, l_h, vec(A) (column-major), b, w)`` with one flat output ``(vec(N), b, b − N w)``,
+    for :meth:`BufferedFunction.call_flat`."""
+    flat = ca.SX.sym("cone_input", 12)
+    n_rows, b = contact.cone_rows(flat[0], flat[1], flat[2], ca.reshape(flat[3:7], 2, 2), flat[7:9])
+    output = ca.vertcat(ca.vec(n_rows), b, b - n_rows @ flat[9:12])
+    return BufferedFunction(ca.Function("cone_rows_flat", [flat], [output]))
+
+
+_CONE_ROWS = _flat_cone_rows()
+
+
+@dataclass(frozen=True)
+class EstimatorParams:
+    """Parameters of the estimator and of each of its parts.
+
+    Attributes:
+        friction: hand friction and torque limits.
+        ground: ground friction hull.
+        modes: mode classifier.
+        kinematics: kinematic estimator (its ``half_length`` must equal the friction one).
+        contact_force: the hand is in contact while ``f_n`` exceeds this (N).
+    """
+
+    friction: HandFrictionParams = field(default_factory=HandFrictionParams)
+    ground: GroundConeParams = field(default_factory=GroundConeParams)
+    modes: ModeParams = field(default_factory=ModeParams)
+    kinematics: KinematicsParams = field(default_factory=KinematicsParams)
+    contact_force: float = 1.0
+
+    def __post_init__(self) -> None:
+        parts = (
+            ("friction", HandFrictionParams),
+            ("ground", GroundConeParams),
+            ("modes", ModeParams),
+            ("kinematics", KinematicsParams),
+        )
+        for name, kind in parts:
+            if not isinstance(getattr(self, name), kind):
+                raise TypeError(f"{name} must be a {kind.__name__}, got {getattr(self, name)!r}")
+        check_number("contact_force", self.contact_force, low_open=False)
+        if self.friction.half_length != self.kinematics.half_length:
+            raise ValueError(
+                f"friction.half_length ({self.friction.half_length!r}) and kinematics.half_length "
+                f"({self.kinematics.half_length!r}) must be equal: both are the hand's l_h"
+            )
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """Everything estimated at one sample (arrays are read-only; SI units).
+
+    Attributes:
+        time: sample time (s).
+        wrench: the measured hand wrench ``(f_n, f_t, τ)`` (hand frame, N, N·m).
+        cone_rows, cone_bounds: the estimated generalized friction cone ``N w ≤ b`` in the hand
+            frame (6×3, 6), row order :class:`~ccopt.contact.Row`.
+        margins: ``b − N w`` for the measured wrench (N or N·m; ≤ 0 on or beyond a row).
+        row_valid: per row, whether it is estimated (the hand torque rows always are).
+        mu_h: hand friction coefficient.
+        torque_lever: ``l_h_eff`` (m), the hand torque rows are ``|τ| ≤ l_h_eff f_n``.
+        ground_rows, ground_bounds: ground rows ``A f ≤ b`` on the world hand force (2×2 unit
+            normals, 2 offsets in N), rows ``GROUND_SLIDE_POS``, ``GROUND_SLIDE_NEG``.
+        mu_g: ground friction coefficient from the two fitted faces (NaN until both are fitted).
+        hand_mode, hand_geometry, ground_mode: the classified contact configuration.
+        in_contact: whether the hand touches the object (``f_n > contact_force``).
+        theta_o, s_h, s_g, d, r_o: the kinematics (rad, m), NaN where not estimated.
+        theta_o_valid, s_h_valid: whether ``theta_o`` and ``s_h`` are estimated.
+        contact_valid: whether ``d``, ``r_o`` and ``s_g`` are estimated.
+        skipped: True if this sample was not finite and nothing was updated.
+    """
+
+    time: float
+    wrench: np.ndarray
+    cone_rows: np.ndarray
+    cone_bounds: np.ndarray
+    margins: np.ndarray
+    row_valid: np.ndarray
+    mu_h: float
+    torque_lever: float
+    ground_rows: np.ndarray
+    ground_bounds: np.ndarray
+    mu_g: float
+    hand_mode: ContactMode
+    hand_geometry: HandGeometry
+    ground_mode: ContactMode
+    in_contact: bool
+    theta_o: float
+    s_h: float
+    s_g: float
+    d: float
+    r_o: np.ndarray
+    theta_o_valid: bool
+    s_h_valid: bool
+    contact_valid: bool
+    skipped: bool = False
+
+    @property
+    def kinematics_valid(self) -> bool:
+        """Whether ``θ_o``, ``s_h`` and ``s_g`` (and ``d``, ``r_o``) are all estimated."""
+        return self.theta_o_valid and self.s_h_valid and self.contact_valid
+
+    @property
+    def configuration(self) -> ContactConfiguration:
+        """The classified modes as a :class:`ccopt.modes.ContactConfiguration`."""
+        return ContactConfiguration(self.hand_mode, self.hand_geometry, self.ground_mode)
+
+
+class Estimator:
+    """The object-agnostic estimator (see the module docstring)."""
+
+    def __init__(self, params: EstimatorParams | None = None) -> None:
+        self.params = params if params is not None else EstimatorParams()
+        self.friction = HandFrictionEstimator(self.params.friction)
+        self.ground = GroundConeEstimator(self.params.ground)
+        self.classifier = ModeClassifier(self.params.modes)
+        self.kinematics = KinematicEstimator(self.params.kinematics)
+        self._cone_input = np.zeros(12)
+        self._cone_ground: GroundCone | None = None
+        self._last: Estimate | None = None
+
+    def update(self, time: float, hand_pose: ArrayLike, hand_wrench: ArrayLike) -> Estimate:
+        """Process one sample: ``hand_pose = (x_h, y_h, θ_h)`` (world), ``hand_wrench = (f_n, f_t, τ)``."""
+        pose = np.asarray(hand_pose, dtype=float)
+        wrench = np.array(hand_wrench, dtype=float)
+        if pose.shape != (3,) or wrench.shape != (3,):
+            raise ValueError(
+                f"hand_pose and hand_wrench must have shape (3,), got {pose.shape} and {wrench.shape}"
+            )
+        values = [time, *pose.tolist(), *wrench.tolist()]
+        if not all(map(math.isfinite, values)):
+            return self._skip(time)
+        theta_h, f_n, f_t = values[3], values[4], values[5]
+        e_n, e_t = geometry.hand_normal(theta_h).tolist(), geometry.hand_tangent(theta_h).tolist()
+        in_contact = f_n > self.params.contact_force
+        if in_contact:
+            self.friction.update(f_n, f_t)
+            force = np.array([f_n * e_n[0] + f_t * e_t[0], f_n * e_n[1] + f_t * e_t[1]])  # world (f_x, f_y)
+            self.ground.update(time, force)
+        friction, ground = self.friction, self.ground.cone
+        cone_rows, cone_bounds, margins = self._cone(theta_h, friction.mu_h, friction.l_h_eff, ground, wrench)
+        valid = [friction.valid, friction.valid, True, True, ground.valid, ground.valid]  # order: Row
+        modes = self.classifier.update(time, margins.tolist(), valid)
+        kinematics = self.kinematics.update(pose, e_n, e_t, modes, in_contact)
+        row_valid = np.array(valid)
+        wrench.flags.writeable = False
+        row_valid.flags.writeable = False
+        self._last = Estimate(
+            time=float(time),
+            wrench=wrench,
+            cone_rows=cone_rows,
+            cone_bounds=cone_bounds,
+            margins=margins,
+            row_valid=row_valid,
+            mu_h=friction.mu_h,
+            torque_lever=friction.l_h_eff,
+            ground_rows=ground.A,
+            ground_bounds=ground.b,
+            mu_g=ground.mu_g,
+            hand_mode=modes.hand_mode,
+            hand_geometry=modes.hand_geometry,
+            ground_mode=modes.ground_mode,
+            in_contact=in_contact,
+            theta_o=kinematics.theta_o,
+            s_h=kinematics.s_h,
+            s_g=kinematics.s_g,
+            d=kinematics.d,
+            r_o=kinematics.r_o,
+            theta_o_valid=kinematics.theta_o_valid,
+            s_h_valid=kinematics.s_h_valid,
+            contact_valid=kinematics.contact_valid,
+        )
+        return self._last
+
+    def _cone(
+        self, theta_h: float, mu_h: float, l_h: float, ground: GroundCone, wrench: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Read-only ``(N (6×3), b (6), b − N w (6))`` of :data:`ccopt.contact.cone_rows` (hand frame)."""
+        flat = self._cone_input
+        flat[0], flat[1], flat[2] = theta_h, mu_h, l_h
+        if ground is not self._cone_ground:  # the ground rows change only when refitted
+            flat[3:7] = ground.A.ravel(order="F")
+            flat[7:9] = ground.b
+            self._cone_ground = ground
+        flat[9:12] = wrench
+        out = _CONE_ROWS.call_flat(flat)
+        out.flags.writeable = False
+        rows = 3 * N_CONE_ROWS
+        return out[:rows].reshape(3, N_CONE_ROWS).T, out[rows : rows + N_CONE_ROWS], out[rows + N_CONE_ROWS :]
+
+    def _skip(self, time: float) -> Estimate:
+        if self._last is None:
+            return _empty_estimate(time, self.friction, self.ground)
+        return dataclasses.replace(self._last, time=float(time), skipped=True)
+
+
+def _empty_estimate(time: float, friction: HandFrictionEstimator, ground: GroundConeEstimator) -> Estimate:
+    """The estimate before any finite sample: no cone (NaN), nothing valid, not in contact."""
+    nan = math.nan
+    return Estimate(
+        time=float(time),
+        wrench=np.full(3, nan),
+        cone_rows=np.full((N_CONE_ROWS, 3), nan),
+        cone_bounds=np.full(N_CONE_ROWS, nan),
+        margins=np.full(N_CONE_ROWS, nan),
+        row_valid=np.zeros(N_CONE_ROWS, dtype=bool),
+        mu_h=friction.mu_h,
+        torque_lever=friction.l_h_eff,
+        ground_rows=ground.cone.A,
+        ground_bounds=ground.cone.b,
+        mu_g=nan,
+        hand_mode=ContactMode.STICK,
+        hand_geometry=HandGeometry.FLUSH,
+        ground_mode=ContactMode.STICK,
+        in_contact=False,
+        theta_o=nan,
+        s_h=nan,
+        s_g=nan,
+        d=nan,
+        r_o=np.full(2, nan),
+        theta_o_valid=False,
+        s_h_valid=False,
+        contact_valid=False,
+        skipped=True,
+    )
+
+
+def replay(
+    times: Iterable[float],
+    hand_poses: Iterable[ArrayLike],
+    hand_wrenches: Iterable[ArrayLike],
+    params: EstimatorParams | None = None,
+) -> list[Estimate]:
+    """Run a fresh :class:`Estimator` over a recording; one :class:`Estimate` per sample."""
+    estimator = Estimator(params)
+    return [
+        estimator.update(time, pose, wrench)
+        for time, pose, wrench in zip(times, hand_poses, hand_wrenches, strict=True)
+    ]
