@@ -99,7 +99,9 @@ class GroundCone:
         A: 2×2, unit rows: ``GROUND_SLIDE_POS`` (right face), ``GROUND_SLIDE_NEG`` (left face).
         b: 2, offsets (N).
         valid: True once enough forces back the rows (both rows share it).
-        fitted: per row, True if it is a fitted friction face, False if the conservative prior row.
+        fitted: per row, True if it was fitted to a long straight side of the hull — the friction
+            face once the object slid that way, until then the edge of the sticking forces seen,
+            which lies inside the face — and False for the conservative prior row.
         mu_g: ``cot(∠(a₊, a₋)/2)`` if both faces are fitted, else NaN.
         apex: intersection of the two rows (N, ``(0, m g)`` for a horizontal ground) if both faces
             are fitted, else NaN.
