@@ -15,7 +15,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(PY) -m benchmarks.qp_latency --quick
+	$(PY) -m ccopt.cli run --object paper-triangle --schedule paper --plant planar --seed 0 --out runs/demo
 
 test: $(STAMP)
 	$(PY) -m ruff check .

@@ -66,6 +66,9 @@ def study_modules() -> dict[str, str]:
         "feasibility": "studies.feasibility",
         "qp-region": "studies.qp_region",
         "gradients": "studies.gradients",
+        "paper": "studies.paper",
+        "robustness": "studies.robustness",
+        "perturbation": "studies.perturbation",
     }
 
 

@@ -1,0 +1,212 @@
+"""``ccopt``: run, plot and benchmark from the command line.
+
+    ccopt run   --object paper-triangle --schedule paper --plant planar --seed 0 --out runs/tri
+    ccopt plot  runs/tri
+    ccopt study feasibility --workers 2
+    ccopt bench qp_latency --quick
+
+Degrees and millimetres at the command line (vertices in mm), SI inside. Bad input gets one line
+naming the bad value and exit status 2; Ctrl-C during a run keeps the record written so far.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import runpy
+import sys
+from collections.abc import Sequence
+from dataclasses import asdict
+from pathlib import Path
+
+import numpy as np
+
+from ccopt import metrics, objects, record
+from ccopt.cliutil import OneLineParser, fail, print_table
+from ccopt.objects import PlanarObject
+from ccopt.schedule import load_schedule
+
+BENCHMARKS = ("qp_latency", "plant_speed", "estimator_speed")
+
+
+def parse_vertices(text: str) -> np.ndarray:
+    """``"x,y;x,y;..."`` in millimetres to an ``(n, 2)`` array in metres."""
+    try:
+        points = [[float(v) for v in pair.split(",")] for pair in text.split(";") if pair.strip()]
+        vertices = np.array(points, dtype=float)
+    except ValueError:
+        raise ValueError(f"--vertices {text!r} is not of the form 'x,y;x,y;...' (mm)") from None
+    if vertices.ndim != 2 or vertices.shape[1] != 2:
+        raise ValueError(f"--vertices {text!r} is not of the form 'x,y;x,y;...' (mm)")
+    return vertices * 1e-3
+
+
+def build_object(args: argparse.Namespace) -> PlanarObject:
+    """The object the user asked for (the controller is never told any of it)."""
+    friction = {"mu_hand": args.mu_hand, "mu_ground": args.mu_ground}
+    if args.vertices is not None:
+        mass = args.mass if args.mass is not None else 0.3
+        return objects.from_vertices(parse_vertices(args.vertices), mass + args.added_mass, **friction)
+    return objects.make_object(args.object, mass=args.mass, added_mass=args.added_mass, **friction)
+
+
+def _run_parser(commands: argparse._SubParsersAction) -> None:
+    run = commands.add_parser("run", help="manipulate an unknown object through a schedule")
+    shape = run.add_mutually_exclusive_group()
+    shape.add_argument("--object", default="paper-triangle", help="library object name")
+    shape.add_argument("--vertices", help="convex polygon 'x,y;x,y;...' in mm, counter-clockwise")
+    run.add_argument("--mass", type=float, help="object mass, kg (default: the object's)")
+    run.add_argument("--added-mass", type=float, default=0.0, help="mass added to the object, kg")
+    run.add_argument("--mu-hand", type=float, default=0.5, help="hand/object friction coefficient")
+    run.add_argument("--mu-ground", type=float, default=0.8, help="object/ground friction coefficient")
+    run.add_argument("--plant", choices=("planar", "panda"), default="planar")
+    run.add_argument("--schedule", default="paper", help="built-in name (paper, smoke) or a .yaml/.json file")
+    run.add_argument("--seed", type=int, default=0)
+    run.add_argument("--estimator-hz", type=float, default=100.0)
+    run.add_argument("--controller-hz", type=float, default=30.0)
+    run.add_argument("--out", default="runs/latest", help="run folder (created)")
+    run.add_argument("--no-figures", action="store_true", help="skip the figures and the GIF")
+    run.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def _command_run(args: argparse.Namespace, prog: str) -> int:
+    from ccopt import closed_loop
+
+    try:
+        obj = build_object(args)
+        schedule = load_schedule(args.schedule)
+        params = closed_loop.LoopParams(
+            plant=args.plant, estimator_hz=args.estimator_hz, controller_hz=args.controller_hz
+        )
+        folder = record.prepare_folder(args.out)
+    except (ValueError, TypeError) as error:
+        fail(prog, str(error))
+    meta = {
+        "object": {
+            "name": obj.name,
+            "vertices": obj.vertices.tolist(),
+            "mass": obj.mass,
+            "mu_hand": obj.mu_hand,
+            "mu_ground": obj.mu_ground,
+        },
+        "schedule": schedule.to_dict(),
+        "seed": args.seed,
+        "params": {
+            "plant": args.plant,
+            "estimator_hz": args.estimator_hz,
+            "controller_hz": args.controller_hz,
+            "l_h": params.plant_params.l_h,
+            "start": asdict(params.start),
+        },
+    }
+    result = closed_loop_with_progress(closed_loop, obj, schedule, params, args, folder, meta)
+    loaded = record.load_record(folder)
+    summary = metrics.summarize(
+        loaded.data, loaded.meta.get("steps", []), len(schedule.steps), result.sim_time, result.wall_time
+    )
+    record.write_summary(folder, summary)
+    print_summary(summary, folder, interrupted=result.interrupted)
+    if not args.no_figures and loaded.data:
+        from ccopt import plots
+
+        paths = plots.write_figures(record.load_record(folder), folder)
+        print("figures: " + ", ".join(str(p) for p in paths))
+    return 130 if result.interrupted else 0
+
+
+def closed_loop_with_progress(closed_loop, obj, schedule, params, args, folder, meta):
+    """Run with a tqdm bar over the schedule's steps (unless ``--no-progress``)."""
+    from tqdm import tqdm
+
+    with tqdm(total=len(schedule.steps), unit="step", disable=args.no_progress, leave=False) as bar:
+
+        def on_tick(sim_time: float, index: int, total: int) -> None:
+            bar.n = min(index, total)
+            bar.set_postfix(sim=f"{sim_time:.1f}s", refresh=False)
+            bar.refresh()
+
+        return closed_loop.run(obj, schedule, params, seed=args.seed, out=folder, meta=meta, on_tick=on_tick)
+
+
+def print_summary(summary: dict, folder: Path, interrupted: bool) -> None:
+    def stat(key: str, field: str) -> str:
+        value = summary[key][field]
+        return "n/a" if value is None else f"{value:.2f}"
+
+    rows = [
+        ("completed", str(summary["completed"])),
+        ("steps done", f"{summary['steps_done']}/{summary['steps_total']}"),
+        (
+            "θ_o error median / p95 (deg)",
+            f"{stat('theta_err_deg', 'median')} / {stat('theta_err_deg', 'p95')}",
+        ),
+        ("s_h error median / p95 (mm)", f"{stat('s_h_err_mm', 'median')} / {stat('s_h_err_mm', 'p95')}"),
+        ("s_g error median / p95 (mm)", f"{stat('s_g_err_mm', 'median')} / {stat('s_g_err_mm', 'p95')}"),
+        (
+            "realised/commanded median [q25, q75]",
+            f"{stat('ratio_realised_commanded', 'median')} "
+            f"[{stat('ratio_realised_commanded', 'q25')}, {stat('ratio_realised_commanded', 'q75')}]",
+        ),
+        ("unintended slips", str(summary["unintended_slips"])),
+        ("sim / wall time (s)", f"{summary['sim_time_s']:.1f} / {summary['wall_time_s']:.1f}"),
+    ]
+    if interrupted:
+        rows.insert(0, ("INTERRUPTED", "record kept"))
+    print_table(rows, ("metric", "value"))
+    print(f"record: {folder}")
+
+
+def _command_plot(args: argparse.Namespace, prog: str) -> int:
+    try:
+        loaded = record.load_record(args.record)
+    except ValueError as error:
+        fail(prog, str(error))
+    from ccopt import plots
+
+    paths = plots.write_figures(loaded, Path(args.record))
+    print("figures: " + ", ".join(str(p) for p in paths))
+    return 0
+
+
+def _command_bench(args: argparse.Namespace, prog: str) -> int:
+    if args.name not in BENCHMARKS:
+        fail(prog, f"unknown benchmark {args.name!r}; expected one of: {', '.join(BENCHMARKS)}")
+    sys.argv = [f"benchmarks.{args.name}", *args.rest]
+    runpy.run_module(f"benchmarks.{args.name}", run_name="__main__")
+    return 0
+
+
+def _command_study(args: argparse.Namespace, prog: str) -> int:
+    from studies.runner import study_modules
+
+    modules = study_modules()
+    if args.name not in modules:
+        fail(prog, f"unknown study {args.name!r}; expected one of: {', '.join(modules)}")
+    module = importlib.import_module(modules[args.name])
+    return int(module.main(args.rest) or 0)
+
+
+def make_parser() -> OneLineParser:
+    parser = OneLineParser(prog="ccopt", description="Manipulate unknown objects through contact.")
+    commands = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
+    _run_parser(commands)
+    plot = commands.add_parser("plot", help="(re)draw the figures of a run folder")
+    plot.add_argument("record", help="run folder")
+    study = commands.add_parser("study", help="run a scripted study (see studies/)")
+    study.add_argument("name", help="feasibility, qp-region, gradients, ...")
+    study.add_argument("rest", nargs=argparse.REMAINDER, help="arguments for the study")
+    bench = commands.add_parser("bench", help="run a speed benchmark (see benchmarks/)")
+    bench.add_argument("name", help=", ".join(BENCHMARKS))
+    bench.add_argument("rest", nargs=argparse.REMAINDER, help="arguments for the benchmark")
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = make_parser().parse_args(argv)
+    prog = f"ccopt {args.command}"
+    handlers = {"run": _command_run, "plot": _command_plot, "study": _command_study, "bench": _command_bench}
+    return handlers[args.command](args, prog)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,322 @@
+"""The closed loop: plant → sensors → estimator → controller → plant, at their own rates.
+
+The plant steps at its timestep (1 ms). Every ``1/estimator_hz`` the sensors are read and the
+estimator updated; every ``1/controller_hz`` the schedule is advanced and the controller computes a
+hand-frame change of the impedance target, which the loop spreads evenly over the next control
+period (a ramp with velocity feed-forward, so the target never jumps). Ground truth is read only to
+be recorded. A run is deterministic for a given seed.
+
+Progress along a step is measured on the estimated coordinates ``(θ_o, s_h, s_g)``. Before the
+kinematics are estimated (the paper's exploration phase), a step measures its progress on the hand's
+own motion instead — ``θ_h`` for a pivot, ``−r_h·e_t`` for a hand slide (the object sticks on the
+ground) and ``x_h`` for a ground slide (the hand sticks on the object) — which changes exactly like
+the coordinate while the commanded configuration holds. The source is fixed for the whole step.
+"""
+
+from __future__ import annotations
+
+import time as wallclock
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+
+from ccopt import geometry
+from ccopt.control.controller import Command, ControlInput, Controller, ControllerParams
+from ccopt.estimation.estimator import Estimate, Estimator, EstimatorParams
+from ccopt.estimation.friction import HandFrictionParams
+from ccopt.estimation.kinematics import KinematicsParams
+from ccopt.objects import PlanarObject
+from ccopt.plant.base import Plant, PlantParams, StartConfig
+from ccopt.plant.mujoco_planar import hand_over_vertex
+from ccopt.plant.sensors import SensorParams, Sensors
+from ccopt.record import RecordWriter
+from ccopt.schedule import MOTION_CODES, Schedule, Step
+
+PlantKind = Literal["planar", "panda"]
+
+
+@dataclass(frozen=True)
+class Perturbation:
+    """A scripted external push on the object: world force (N) from ``time`` (s) for ``duration`` (s)."""
+
+    time: float
+    force: tuple[float, float]
+    duration: float
+
+
+HAND_HALF_LENGTH = 0.03
+"""Default ``l_h`` of closed-loop runs, m: a 6 cm hand. The paper assumes the object's face always
+contains the hand, and its hexagon's and pentagon's faces are 7 and 8 cm (DESIGN.md's 10 cm plant
+default fits only the triangle and the rectangle). Note that with the ground contact sticking, a
+flush hand can slide only where ``|d μ_h + s_h| ≤ l_h`` (moment balance about the ground contact:
+``τ_h = d f_t − s_h f_n − M_grav``); for the paper's objects (``d`` ≈ 10–12 cm, ``μ_h`` = 0.5) that
+holds for neither hand length when the hand is over the ground contact."""
+
+
+@dataclass(frozen=True)
+class LoopParams:
+    """Rates and components of a closed-loop run.
+
+    ``start`` gives the object's tilt (resting on one vertex, as in the paper) and the push; with
+    ``centre_hand`` the hand starts as close over the ground contact as its length allows
+    (:func:`~ccopt.plant.mujoco_planar.hand_over_vertex`), whatever ``start.s_h`` says. The estimator
+    is told the hand's length (the robot knows its own hand), nothing about the object.
+    """
+
+    plant: PlantKind = "planar"
+    estimator_hz: float = 100.0
+    controller_hz: float = 30.0
+    start: StartConfig = field(default_factory=lambda: StartConfig(theta_o=0.3, normal_force=10.0))
+    centre_hand: bool = True
+    plant_params: PlantParams = field(default_factory=lambda: PlantParams(l_h=HAND_HALF_LENGTH))
+    sensor_params: SensorParams = field(default_factory=SensorParams)
+    controller_params: ControllerParams = field(default_factory=ControllerParams)
+    estimator_params: EstimatorParams | None = None
+    perturbations: tuple[Perturbation, ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.plant not in ("planar", "panda"):
+            raise ValueError(f"unknown plant {self.plant!r}; expected 'planar' or 'panda'")
+        top = 1.0 / self.plant_params.timestep
+        for name in ("estimator_hz", "controller_hz"):
+            rate = getattr(self, name)
+            if not (np.isfinite(rate) and 0.0 < rate <= top):
+                raise ValueError(f"{name} must be in (0, {top:g}] Hz, got {rate!r}")
+
+
+@dataclass(frozen=True)
+class StepResult:
+    """How one schedule step went, by the estimate (truth is scored in :mod:`ccopt.metrics`)."""
+
+    index: int
+    kind: str
+    delta: float
+    start_time: float
+    end_time: float
+    reached: bool
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """What a run returns; the full time series is in the record folder (or ``samples``)."""
+
+    steps: tuple[StepResult, ...]
+    samples: dict[str, np.ndarray]
+    sim_time: float
+    wall_time: float
+    interrupted: bool
+    folder: Path | None
+
+
+def make_plant(kind: PlantKind, obj: PlanarObject, params: PlantParams, start: StartConfig) -> Plant:
+    """The planar or the Panda plant (the Panda module is imported only when asked for)."""
+    if kind == "planar":
+        from ccopt.plant.mujoco_planar import PlanarPlant
+
+        return PlanarPlant(obj, params, start)
+    from ccopt.plant.mujoco_panda import PandaPlant
+
+    return PandaPlant(obj, params, start)
+
+
+def estimator_params(half_length: float) -> EstimatorParams:
+    """Default estimator parameters for a hand of half-length ``half_length`` (m)."""
+    return EstimatorParams(
+        friction=HandFrictionParams(half_length=half_length),
+        kinematics=KinematicsParams(half_length=half_length),
+    )
+
+
+def control_input(estimate: Estimate, hand_pose: np.ndarray, coordinates: np.ndarray) -> ControlInput:
+    """What the controller reads from an estimate, the measured hand pose and the progress source."""
+    return ControlInput(
+        wrench=estimate.wrench,
+        cone_rows=estimate.cone_rows,
+        cone_bounds=estimate.cone_bounds,
+        row_valid=estimate.row_valid,
+        l_h=estimate.torque_lever,
+        hand_angle=float(hand_pose[2]),
+        s_h=estimate.s_h,
+        d=estimate.d,
+        kinematics_valid=estimate.kinematics_valid,
+        coordinates=coordinates,
+    )
+
+
+def hand_proxy(hand_pose: np.ndarray) -> np.ndarray:
+    """Coordinates that change like ``(θ_o, s_h, s_g)`` while the commanded configuration holds."""
+    x_h, y_h, theta_h = hand_pose
+    return np.array([theta_h, -np.dot([x_h, y_h], geometry.hand_tangent(theta_h)), x_h])
+
+
+class _StepTracker:
+    """Walks the schedule: the current command, its progress source, completion and timeout."""
+
+    def __init__(self, schedule: Schedule) -> None:
+        self.steps = schedule.steps
+        self.index = -1
+        self.results: list[StepResult] = []
+        self.use_estimate = False
+        self.command: Command | None = None
+        self.start_time = 0.0
+
+    @property
+    def step(self) -> Step:
+        return self.steps[self.index]
+
+    @property
+    def done(self) -> bool:
+        return self.index >= len(self.steps)
+
+    def coordinates(self, estimate: Estimate, hand_pose: np.ndarray) -> np.ndarray:
+        if self.use_estimate:
+            return np.array([estimate.theta_o, estimate.s_h, estimate.s_g])
+        return hand_proxy(hand_pose)
+
+    def advance(self, now: float, estimate: Estimate, hand_pose: np.ndarray, reached: bool) -> None:
+        if self.index >= 0:
+            self.results.append(
+                StepResult(self.index, self.step.kind, self.step.delta, self.start_time, now, reached)
+            )
+        self.index += 1
+        if self.done:
+            return
+        self.use_estimate = bool(estimate.kinematics_valid)
+        targets = self.coordinates(estimate, hand_pose)
+        if self.step.coordinate is not None:
+            targets[self.step.coordinate] += self.step.delta
+        self.command = Command(self.step.motion, targets)
+        self.start_time = now
+
+    def update(self, now: float, estimate: Estimate, hand_pose: np.ndarray) -> None:
+        """Move to the next step when this one is reached or timed out."""
+        if self.index < 0:
+            self.advance(now, estimate, hand_pose, reached=True)
+            return
+        elapsed = now - self.start_time
+        if self.step.kind == "hold":
+            if elapsed >= self.step.timeout:
+                self.advance(now, estimate, hand_pose, reached=True)
+            return
+        k = self.step.coordinate
+        error = self.command.targets[k] - self.coordinates(estimate, hand_pose)[k]
+        if abs(error) <= self.step.tolerance:
+            self.advance(now, estimate, hand_pose, reached=True)
+        elif elapsed >= self.step.timeout:
+            self.advance(now, estimate, hand_pose, reached=False)
+
+
+def run(
+    obj: PlanarObject,
+    schedule: Schedule,
+    params: LoopParams | None = None,
+    seed: int = 0,
+    out: str | Path | None = None,
+    meta: dict[str, object] | None = None,
+    on_tick: Callable[[float, int, int], None] | None = None,
+) -> RunResult:
+    """Run ``schedule`` on ``obj`` in closed loop; record to ``out`` if given.
+
+    ``on_tick(sim_time, step_index, n_steps)`` is called at every control tick (progress bars).
+    Ctrl-C ends the run early: the record is closed with status ``interrupted`` and the result says so.
+    """
+    params = params or LoopParams()
+    start = (
+        hand_over_vertex(obj, params.start, params.plant_params.l_h) if params.centre_hand else params.start
+    )
+    plant = make_plant(params.plant, obj, params.plant_params, start)
+    sensors = Sensors(plant, params.sensor_params, seed)
+    estimator = Estimator(params.estimator_params or estimator_params(params.plant_params.l_h))
+    controller = Controller(params.controller_params)
+    writer = RecordWriter(out, meta or {}) if out is not None else None
+    samples: dict[str, list[np.ndarray]] = {}
+    tracker = _StepTracker(schedule)
+    dt = plant.timestep
+    estimator_every = max(1, round(1.0 / (params.estimator_hz * dt)))
+    controller_every = max(1, round(1.0 / (params.controller_hz * dt)))
+    target = np.array(plant.target(), dtype=float)
+    velocity = np.zeros(3)
+    pending = list(params.perturbations)
+    last_slack, last_feasible = 0.0, True
+    estimate: Estimate | None = None
+    start_wall = wallclock.perf_counter()
+    interrupted = False
+    tick = 0
+    try:
+        while not tracker.done:
+            tick += 1
+            target = target + velocity * dt
+            plant.set_target(target, velocity)
+            while pending and plant.time >= pending[0].time:
+                push = pending.pop(0)
+                plant.push_object(push.force, push.duration)
+            plant.step(1)
+            if tick % estimator_every == 0 or estimate is None:
+                measurement = sensors.read()
+                estimate = estimator.update(measurement.time, measurement.hand_pose, measurement.hand_wrench)
+                hand_pose = measurement.hand_pose if np.all(np.isfinite(measurement.hand_pose)) else None
+                sample = _sample(plant, measurement, estimate, target, tracker, last_slack, last_feasible)
+                if writer is not None:
+                    writer.append(sample)
+                else:
+                    for key, value in sample.items():
+                        samples.setdefault(key, []).append(np.asarray(value))
+            if tick % controller_every == 0 and hand_pose is not None:
+                tracker.update(plant.time, estimate, hand_pose)
+                if tracker.done:
+                    break
+                coordinates = tracker.coordinates(estimate, hand_pose)
+                output = controller.update(control_input(estimate, hand_pose, coordinates), tracker.command)
+                last_slack, last_feasible = output.solution.slack, output.solution.feasible
+                period = controller_every * dt
+                velocity = geometry.twist_hand_to_world(hand_pose[2], output.step) / period
+                if on_tick is not None:
+                    on_tick(plant.time, tracker.index, len(schedule.steps))
+    except KeyboardInterrupt:
+        interrupted = True
+    wall = wallclock.perf_counter() - start_wall
+    result = RunResult(
+        steps=tuple(tracker.results),
+        samples={key: np.stack(values) for key, values in samples.items()},
+        sim_time=plant.time,
+        wall_time=wall,
+        interrupted=interrupted,
+        folder=Path(out) if out is not None else None,
+    )
+    if writer is not None:
+        writer.meta["steps"] = [vars(step) for step in result.steps]
+        writer.close(status="interrupted" if interrupted else "completed")
+    return result
+
+
+def _sample(plant, measurement, estimate, target, tracker, slack, feasible) -> dict[str, np.ndarray]:
+    truth = plant.truth()
+    command = tracker.command
+    return {
+        "time": np.float64(measurement.time),
+        "hand_pose": measurement.hand_pose,
+        "hand_wrench": measurement.hand_wrench,
+        "target": target.copy(),
+        "est_coordinates": np.array([estimate.theta_o, estimate.s_h, estimate.s_g]),
+        "est_d": np.float64(estimate.d),
+        "est_kinematics_valid": np.bool_(estimate.kinematics_valid),
+        "est_mu_h": np.float64(estimate.mu_h),
+        "est_ground_rows": estimate.ground_rows,
+        "est_ground_bounds": estimate.ground_bounds,
+        "est_modes": np.array([estimate.hand_mode, estimate.hand_geometry, estimate.ground_mode], np.int8),
+        "step_index": np.int16(tracker.index),
+        "motion": np.int8(MOTION_CODES[tracker.step.kind] if not tracker.done and tracker.index >= 0 else 0),
+        "command_targets": command.targets.copy() if command is not None else np.full(3, np.nan),
+        "qp_slack": np.float64(slack),
+        "qp_feasible": np.bool_(feasible),
+        "true_coordinates": np.array([truth.theta_o, truth.s_h, truth.s_g]),
+        "true_d": np.float64(truth.d),
+        "true_modes": np.array([truth.hand_mode, truth.hand_geometry, truth.ground_mode], np.int8),
+        "true_contacts": np.array([truth.in_contact_hand, truth.in_contact_ground]),
+        "true_slip_rates": np.array([truth.hand_slip_rate, truth.ground_slip_rate]),
+        "true_hand_pose": plant.hand_pose(),
+        "true_hand_wrench": plant.hand_wrench(),
+    }

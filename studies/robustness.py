@@ -1,0 +1,323 @@
+"""Closed-loop robustness over randomised objects: success rate, error distributions, failure causes.
+
+    python -m studies robustness [--trials 50] [--schedule paper] [--plant planar] [--workers 2]
+
+Each trial draws, from its own seed (:func:`studies.runner.trial_seeds` of ``--seed``), one of the
+five shapes (:data:`SHAPES`) with side 7–19 cm (a rectangle draws width and height in 7–19 cm),
+mass 0.2–0.95 kg, ``μ_hand`` 0.3–0.7 and ``μ_ground`` 0.4–0.9 (all uniform), runs the schedule in
+closed loop (no record folder) and scores it with :func:`ccopt.metrics.summarize`.
+
+A trial *succeeds* when it completed (every step reached, both contacts kept) without an unintended
+slip. The causes of a failure (:func:`failure_causes`, several may apply, listed in this order):
+
+``loss of contact``        a contact was open in more than 1 % of the samples;
+``slip at the ground``     the ground contact slid when it had to stick;
+``slip at the hand``       the hand slid along the object when it had to stick;
+``hand pivot``             the hand turned against the object when it had to stay flush;
+``infeasible QP``          more than 20 % of the control ticks had no feasible step;
+``estimator reset``        the estimated kinematics became invalid after having been valid
+                           (counted from the samples: ``est_kinematics_valid`` going true → false);
+``timeout``                a step was not reached and none of the above applies.
+
+An object whose hand face is shorter than the hand is ``does not fit the hand`` (not run); a trial
+that raised is ``run error`` with its message. Outputs in ``<out>``: ``results.json``/``results.csv``
+(one row per trial, with the drawn object) and ``robustness.png`` (error distributions, causes, and
+success over size and mass).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections import Counter
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ccopt import closed_loop, metrics
+from ccopt.cliutil import print_table
+from ccopt.closed_loop import LoopParams
+from ccopt.objects import PlanarObject, make_object
+from ccopt.plant.mujoco_planar import hand_over_vertex
+from ccopt.schedule import load_schedule
+from studies import runner
+from studies.paper import (
+    cell,
+    checked_schedule,
+    closed_loop_arguments,
+    finished,
+    flat_summary,
+    misses,
+    slips_cell,
+)
+
+SHAPES = ("triangle", "square", "rectangle", "pentagon", "hexagon")
+SIDE = (0.07, 0.19)
+"""Range of a side (and of a rectangle's width and height), m."""
+MASS = (0.2, 0.95)
+"""Range of the mass, kg."""
+MU_HAND = (0.3, 0.7)
+MU_GROUND = (0.4, 0.9)
+INFEASIBLE_SHARE = 0.2
+"""A run with more than this share of infeasible control ticks fails (also) by ``infeasible QP``."""
+
+LOSS_OF_CONTACT = "loss of contact"
+GROUND_SLIP = "slip at the ground"
+HAND_SLIP = "slip at the hand"
+HAND_PIVOT = "hand pivot"
+INFEASIBLE = "infeasible QP"
+ESTIMATOR_RESET = "estimator reset"
+TIMEOUT = "timeout"
+DOES_NOT_FIT = "does not fit the hand"
+RUN_ERROR = "run error"
+CAUSES = (
+    LOSS_OF_CONTACT,
+    GROUND_SLIP,
+    HAND_SLIP,
+    HAND_PIVOT,
+    INFEASIBLE,
+    ESTIMATOR_RESET,
+    TIMEOUT,
+    DOES_NOT_FIT,
+    RUN_ERROR,
+)
+_SLIP_CAUSES = {"ground_slide": GROUND_SLIP, "hand_slide": HAND_SLIP, "hand_pivot": HAND_PIVOT}
+
+
+@dataclass(frozen=True)
+class RandomObject:
+    """One trial's object and run. Lengths in m (``height`` only for a rectangle), mass in kg."""
+
+    index: int
+    seed: int
+    shape: str
+    side: float
+    height: float | None
+    mass: float
+    mu_hand: float
+    mu_ground: float
+    schedule: str
+    plant: str
+
+
+def draw_object(index: int, seed: int, schedule: str, plant: str) -> RandomObject:
+    """The object of trial ``index``, drawn from ``seed`` (the same seed seeds the sensor noise)."""
+    rng = np.random.default_rng(seed)
+    shape = str(rng.choice(SHAPES))
+    side = float(rng.uniform(*SIDE))
+    height = float(rng.uniform(*SIDE)) if shape == "rectangle" else None
+    mass, mu_hand, mu_ground = (float(rng.uniform(*span)) for span in (MASS, MU_HAND, MU_GROUND))
+    return RandomObject(index, seed, shape, side, height, mass, mu_hand, mu_ground, schedule, plant)
+
+
+def build_object(spec: RandomObject) -> PlanarObject:
+    size = {"width": spec.side, "height": spec.height} if spec.shape == "rectangle" else {"side": spec.side}
+    return make_object(spec.shape, mass=spec.mass, mu_hand=spec.mu_hand, mu_ground=spec.mu_ground, **size)
+
+
+def fits_hand(obj: PlanarObject, params: LoopParams) -> bool:
+    """Whether the hand fits on the start face (else the run cannot start)."""
+    try:
+        hand_over_vertex(obj, params.start, params.plant_params.l_h)
+    except ValueError:
+        return False
+    return True
+
+
+def kinematics_resets(valid: np.ndarray) -> int:
+    """How often the estimated kinematics went from valid to invalid."""
+    flags = np.asarray(valid, dtype=bool)
+    return int(np.sum(flags[:-1] & ~flags[1:]))
+
+
+def failure_causes(summary: Mapping[str, object]) -> list[str]:
+    """Why a run failed (empty if it succeeded), from its summary and ``kinematics_resets``."""
+    if summary["completed"] and summary["unintended_slips"] == 0:
+        return []
+    slid = {event["contact"] for event in summary["slip_events"]}
+    flags = {
+        LOSS_OF_CONTACT: not summary["contact_kept"],
+        **{cause: contact in slid for contact, cause in _SLIP_CAUSES.items()},
+        INFEASIBLE: summary["infeasible_ticks_share"] > INFEASIBLE_SHARE,
+        ESTIMATOR_RESET: summary.get("kinematics_resets", 0) > 0,
+    }
+    causes = [cause for cause in CAUSES if flags.get(cause)]
+    return causes or [TIMEOUT]
+
+
+def robustness_trial(spec: RandomObject) -> dict:
+    """Run one random object; :func:`studies.paper.flat_summary` plus success and causes."""
+    obj = build_object(spec)
+    params = LoopParams(plant=spec.plant)
+    if not fits_hand(obj, params):
+        return {"fits_hand": False, "success": False, "causes": [DOES_NOT_FIT]}
+    schedule = load_schedule(spec.schedule)
+    result = finished(closed_loop.run(obj, schedule, params, seed=spec.seed))
+    steps = [vars(step) for step in result.steps]
+    summary = metrics.summarize(result.samples, steps, len(schedule.steps), result.sim_time, result.wall_time)
+    summary["kinematics_resets"] = kinematics_resets(result.samples["est_kinematics_valid"])
+    causes = failure_causes(summary)
+    return {
+        "fits_hand": True,
+        **flat_summary(summary),
+        "kinematics_resets": summary["kinematics_resets"],
+        "success": not causes,
+        "causes": causes,
+        "misses": misses(summary),
+    }
+
+
+# --- output ---------------------------------------------------------------------------------------
+
+
+def causes_of(result: Mapping[str, object]) -> list[str]:
+    return [RUN_ERROR] if "error" in result else list(result["causes"])
+
+
+def _quartiles(values: list[float]) -> dict[str, float | None]:
+    if not values:
+        return {"q25": None, "median": None, "q75": None, "n": 0}
+    q25, median, q75 = np.percentile(values, [25, 50, 75])
+    return {"q25": float(q25), "median": float(median), "q75": float(q75), "n": len(values)}
+
+
+ERROR_COLUMNS = ("theta_err_deg_median", "s_h_err_mm_median", "s_g_err_mm_median", "ratio_median")
+
+
+def column(results: Sequence[dict], key: str) -> list[float]:
+    return [r[key] for r in results if r.get(key) is not None]
+
+
+def summarise(specs: Sequence[RandomObject], results: Sequence[dict]) -> dict:
+    """Success rate, quartiles over trials of the per-trial medians, cause counts, the failures."""
+    causes = [causes_of(r) for r in results]
+    return {
+        "trials": len(results),
+        "successes": sum(bool(r.get("success")) for r in results),
+        "success_rate": sum(bool(r.get("success")) for r in results) / len(results),
+        "meet_paper_thresholds": sum(r.get("misses") == [] for r in results),
+        "errors_over_trials": {key: _quartiles(column(results, key)) for key in ERROR_COLUMNS},
+        "causes": dict(Counter(c for found in causes for c in found)),
+        "primary_causes": dict(Counter(found[0] for found in causes if found)),
+        "failures": [
+            {"index": spec.index, "object": describe(spec), "causes": found, "error": result.get("error")}
+            for spec, result, found in zip(specs, results, causes, strict=True)
+            if found
+        ],
+    }
+
+
+def describe(spec: RandomObject) -> str:
+    """``shape side(×height) cm, mass kg``."""
+    size = f"{100 * spec.side:.1f}" + (f"×{100 * spec.height:.1f}" if spec.height is not None else "")
+    return f"{spec.shape} {size} cm {spec.mass:.2f} kg"
+
+
+def write_figure(path: Path, specs: Sequence[RandomObject], results: Sequence[dict]) -> None:
+    """Per-trial median errors and ratios, failure-cause counts, success over size and mass."""
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=(12, 6.5), layout="constrained")
+    axes = figure.subplots(2, 3)
+    for ax, key, title in zip(
+        axes[0],
+        ERROR_COLUMNS[:3],
+        ("median |θ_o error| (deg)", "median |s_h error| (mm)", "median |s_g error| (mm)"),
+        strict=True,
+    ):
+        values = column(results, key)
+        if values:
+            ax.boxplot(values, widths=0.5)
+        ax.set_title(f"{title}, {len(values)} trials")
+        ax.set_xticks([])
+    ratios = column(results, "ratio_median")
+    if ratios:
+        axes[1, 0].hist(ratios, bins=20, color="0.55", edgecolor="white")
+    axes[1, 0].axvline(1.0, color="tab:blue", ls="--")
+    axes[1, 0].set(title="median realised / commanded per trial", xlabel="ratio", ylabel="trials")
+    counts = Counter(c for r in results for c in causes_of(r))
+    names = [c for c in CAUSES if counts[c]]
+    axes[1, 1].barh(names, [counts[c] for c in names], color="tab:red")
+    axes[1, 1].invert_yaxis()
+    axes[1, 1].set(title="failure causes (a trial may have several)", xlabel="trials")
+    ok = np.array([bool(r.get("success")) for r in results])
+    size = np.array([100 * (s.side if s.height is None else min(s.side, s.height)) for s in specs])
+    mass = np.array([s.mass for s in specs])
+    axes[1, 2].scatter(size[ok], mass[ok], color="tab:green", label="success")
+    axes[1, 2].scatter(size[~ok], mass[~ok], color="tab:red", marker="x", label="failure")
+    axes[1, 2].set(title="outcome by object", xlabel="side (shortest, cm)", ylabel="mass (kg)")
+    axes[1, 2].legend()
+    figure.savefig(path, dpi=110)
+
+
+def failure_rows(specs: Sequence[RandomObject], results: Sequence[dict]) -> list[tuple[str, ...]]:
+    rows = []
+    for spec, r in zip(specs, results, strict=True):
+        if r.get("success"):
+            continue
+        ran = "error" not in r and r["fits_hand"]
+        rows.append(
+            (
+                str(spec.index),
+                describe(spec),
+                f"{spec.mu_hand:.2f}/{spec.mu_ground:.2f}",
+                f"{r['steps_done']}/{r['steps_total']}" if ran else "-",
+                slips_cell(r) if ran else "-",
+                f"{100 * r['infeasible_share']:.0f}" if ran else "-",
+                ", ".join(causes_of(r)) + (f": {r['error']}" if "error" in r else ""),
+            )
+        )
+    return rows
+
+
+def overview_rows(summary: Mapping[str, object]) -> list[tuple[str, ...]]:
+    rows = [
+        ("success (completed, no slips)", f"{summary['successes']}/{summary['trials']}"),
+        ("meet the paper thresholds", f"{summary['meet_paper_thresholds']}/{summary['trials']}"),
+    ]
+    for key, q in summary["errors_over_trials"].items():
+        rows.append(
+            (
+                f"{key} over trials: median [q25, q75]",
+                f"{cell(q['median'])} [{cell(q['q25'])}, {cell(q['q75'])}]",
+            )
+        )
+    for cause in CAUSES:
+        if cause in summary["causes"]:
+            primary = summary["primary_causes"].get(cause, 0)
+            rows.append((f"cause: {cause}", f"{summary['causes'][cause]} (first cause of {primary})"))
+    return rows
+
+
+def make_parser() -> argparse.ArgumentParser:
+    parser = runner.study_parser("robustness", __doc__.split("\n")[0])
+    closed_loop_arguments(parser)
+    parser.add_argument(
+        "--trials", type=runner.positive_int, default=50, metavar="N", help="random objects (default: 50)"
+    )
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = make_parser()
+    args = parser.parse_args(argv)
+    checked_schedule(parser.prog, args.schedule)
+    seeds = runner.trial_seeds(args.seed, args.trials)
+    specs = [draw_object(k, seed, args.schedule, args.plant) for k, seed in enumerate(seeds)]
+    options = runner.RunOptions.from_args(args)
+    results = runner.run_study(parser.prog, robustness_trial, specs, options)
+    summary = summarise(specs, results)
+    runner.write_results(options.out, specs, results, summary)
+    write_figure(options.out / "robustness.png", specs, results)
+    failed = failure_rows(specs, results)
+    if failed:
+        print_table(failed, ("k", "object", "μ_h/μ_g", "steps", "slips (g h p)", "infeasible %", "causes"))
+    print_table(overview_rows(summary), ("robustness", "value"))
+    print(f"results in {options.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,59 @@
+"""The CLI: bad input gets one clear line and exit status 2, never a traceback."""
+
+import subprocess
+import sys
+
+import pytest
+
+
+def ccopt(*args, cwd=None):
+    return subprocess.run(
+        [sys.executable, "-m", "ccopt.cli", *args], capture_output=True, text=True, cwd=cwd, timeout=120
+    )
+
+
+@pytest.mark.parametrize(
+    ("args", "named"),
+    [
+        (["run", "--object", "dodecahedron"], "dodecahedron"),
+        (["run", "--vertices", "0,0;100,0;50,10;50,100"], "convex"),
+        (["run", "--vertices", "0,0;abc"], "--vertices"),
+        (["run", "--mu-hand", "-0.5"], "-0.5"),
+        (["run", "--mu-ground", "nan"], "nan"),
+        (["run", "--mass", "-1"], "-1"),
+        (["run", "--schedule", "zigzag"], "zigzag"),
+        (["run", "--controller-hz", "5000"], "5000"),
+        (["run", "--plant", "robot"], "robot"),
+        (["plot", "/no/such/run"], "/no/such/run"),
+        (["bench", "warp_speed"], "warp_speed"),
+        (["study", "astrology"], "astrology"),
+        (["frobnicate"], "frobnicate"),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(args, named):
+    result = ccopt(*args, "--no-progress") if args[0] == "run" else ccopt(*args)
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and named in lines[0], result.stderr
+    assert "Traceback" not in result.stderr
+
+
+def test_malformed_schedule_file(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("steps: [{motion: pivot}]")
+    result = ccopt("run", "--schedule", str(bad), "--no-progress")
+    assert result.returncode == 2 and "delta_deg" in result.stderr and len(result.stderr.splitlines()) == 1
+
+
+def test_unwritable_out(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    result = ccopt("run", "--out", str(blocker / "run"), "--no-progress")
+    assert result.returncode == 2 and "cannot write to output folder" in result.stderr
+    assert len(result.stderr.splitlines()) == 1
+
+
+def test_help_everywhere():
+    for args in (["--help"], ["run", "--help"], ["plot", "--help"], ["study", "--help"], ["bench", "--help"]):
+        result = ccopt(*args)
+        assert result.returncode == 0 and "usage" in result.stdout

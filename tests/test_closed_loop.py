@@ -1,0 +1,67 @@
+"""The closed loop on the planar plant, scored against the simulator's ground truth."""
+
+import numpy as np
+import pytest
+
+from ccopt import closed_loop, metrics, record
+from ccopt.objects import make_object
+from ccopt.schedule import load_schedule
+
+
+@pytest.fixture(scope="module")
+def smoke_run():
+    schedule = load_schedule("smoke")
+    result = closed_loop.run(make_object("paper-triangle"), schedule, seed=3)
+    steps = [vars(step) for step in result.steps]
+    summary = metrics.summarize(result.samples, steps, len(schedule.steps), result.sim_time, result.wall_time)
+    return result, summary
+
+
+def test_smoke_schedule_completes_with_the_commanded_rotations(smoke_run):
+    result, summary = smoke_run
+    assert summary["completed"] and summary["contact_kept"]
+    assert summary["steps_done"] == summary["steps_total"]
+    ratios = metrics.realised_ratios(result.samples, [vars(s) for s in result.steps])
+    assert len(ratios) == 4
+    assert np.all((ratios > 0.85) & (ratios < 1.15)), ratios  # true θ_o change / commanded change
+
+
+def test_every_other_contact_keeps_its_mode(smoke_run):
+    _, summary = smoke_run
+    assert summary["unintended_slips"] == 0, summary["slip_events"]
+
+
+def test_the_pivots_return_the_object_to_its_start(smoke_run):
+    result, _ = smoke_run
+    true_theta = result.samples["true_coordinates"][:, 0]
+    assert abs(true_theta[-1] - true_theta[0]) < np.deg2rad(1.0)
+
+
+def test_runs_are_deterministic_for_a_seed():
+    schedule = load_schedule("smoke")
+    first = closed_loop.run(make_object("paper-pentagon"), schedule, seed=7)
+    second = closed_loop.run(make_object("paper-pentagon"), schedule, seed=7)
+    for key in ("hand_pose", "hand_wrench", "target", "true_coordinates"):
+        np.testing.assert_array_equal(first.samples[key], second.samples[key])
+
+
+def test_an_interrupted_run_keeps_its_record(tmp_path):
+    def interrupt(sim_time, index, total):
+        if sim_time > 0.8:
+            raise KeyboardInterrupt
+
+    result = closed_loop.run(
+        make_object("paper-hexagon"), load_schedule("smoke"), seed=0, out=tmp_path / "run", on_tick=interrupt
+    )
+    assert result.interrupted
+    kept = record.load_record(tmp_path / "run")
+    assert kept.meta["status"] == "interrupted"
+    assert 0.75 < kept["time"][-1] < 0.9
+    assert len(kept["time"]) == len(kept["true_coordinates"])
+
+
+def test_bad_loop_parameters_raise():
+    with pytest.raises(ValueError, match="controller_hz"):
+        closed_loop.LoopParams(controller_hz=0.0)
+    with pytest.raises(ValueError, match="unknown plant 'robot'"):
+        closed_loop.LoopParams(plant="robot")
