@@ -141,9 +141,15 @@ def control_input(estimate: Estimate, hand_pose: np.ndarray, coordinates: np.nda
         hand_angle=float(hand_pose[2]),
         s_h=estimate.s_h,
         d=estimate.d,
-        kinematics_valid=estimate.kinematics_valid,
+        kinematics_valid=kinematics_usable(estimate),
         coordinates=coordinates,
     )
+
+
+def kinematics_usable(estimate: Estimate) -> bool:
+    """Valid and finite: an estimate flagged valid with NaN coordinates is treated as unknown."""
+    values = (estimate.theta_o, estimate.s_h, estimate.s_g, estimate.d)
+    return bool(estimate.kinematics_valid) and all(np.isfinite(values))
 
 
 def hand_proxy(hand_pose: np.ndarray) -> np.ndarray:
@@ -172,9 +178,9 @@ class _StepTracker:
         return self.index >= len(self.steps)
 
     def coordinates(self, estimate: Estimate, hand_pose: np.ndarray) -> np.ndarray:
-        if self.use_estimate:
+        if self.use_estimate and kinematics_usable(estimate):
             return np.array([estimate.theta_o, estimate.s_h, estimate.s_g])
-        return hand_proxy(hand_pose)
+        return hand_proxy(hand_pose) if not self.use_estimate else self.command.targets.copy()
 
     def advance(self, now: float, estimate: Estimate, hand_pose: np.ndarray, reached: bool) -> None:
         if self.index >= 0:
@@ -184,7 +190,7 @@ class _StepTracker:
         self.index += 1
         if self.done:
             return
-        self.use_estimate = bool(estimate.kinematics_valid)
+        self.use_estimate = kinematics_usable(estimate)
         targets = self.coordinates(estimate, hand_pose)
         if self.step.coordinate is not None:
             targets[self.step.coordinate] += self.step.delta
