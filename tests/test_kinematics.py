@@ -152,3 +152,31 @@ def test_indeterminate_motion_resets_and_lost_contact_keeps_the_ground_contact()
 def test_bad_parameters_raise_naming_the_field(field, value, error):
     with pytest.raises(error, match=field):
         KinematicsParams(**{field: value})
+
+
+def test_an_unreported_hand_slide_is_caught_by_the_innovation_gate():
+    """The modes say sticking, the hand really slides: eq. 21's innovations re-estimate ``s_h``."""
+    estimator, rng = KinematicEstimator(), np.random.default_rng(11)
+    pivot_about_ground(estimator, rng)
+    for s_h in np.linspace(S_H, S_H + 0.02, 200):
+        estimate = step(estimator, measured(geometry.hand_pose_from_contact(0.05, s_h, D, R_O), rng))
+    gate_width = KinematicsParams().gate * math.hypot(KinematicsParams().position_noise, 1e-3)
+    assert estimate.s_h_valid and abs(estimate.s_h - (S_H + 0.02)) < gate_width
+    assert abs(estimate.d - D) < 1e-3 and np.all(np.abs(estimate.r_o - R_O) < 1e-3)
+
+
+def test_an_unreported_move_of_the_ground_contact_resets_instead_of_keeping_a_wrong_one():
+    """The modes say sticking, but the object has rolled onto a vertex 5 mm higher: eq. 20 cannot
+    explain it, and after ``slip_samples`` rejections the estimate resets rather than report the old
+    ``r_o`` as valid. (A move along ``e_t`` alone is kinematically a hand slide: see the docstring.)"""
+    estimator, rng = KinematicEstimator(), np.random.default_rng(12)
+    pivot_about_ground(estimator, rng)
+    moved = R_O + np.array([0.0, 0.005])
+    outcomes = []
+    for theta in np.radians(np.linspace(0.0, 10.0, 200)):
+        estimate = step(estimator, measured(geometry.hand_pose_from_contact(theta, S_H, D, moved), rng))
+        outcomes.append(estimate.contact_valid)
+        if estimate.contact_valid:
+            assert np.all(np.abs(estimate.r_o - R_O) < 1e-3) or np.all(np.abs(estimate.r_o - moved) < 1e-3)
+    assert not all(outcomes)  # it noticed
+    assert not estimate.contact_valid or np.all(np.abs(estimate.r_o - moved) < 1e-3)

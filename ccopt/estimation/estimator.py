@@ -9,7 +9,10 @@ m/rad) and hand wrench ``(f_n, f_t, τ)`` (hand frame, N and N·m, :mod:`ccopt.g
    evaluated once per sample through one flat buffer, the same function as
    :func:`ccopt.contact.friction_cone` at a fraction of its call overhead) and its margins ``b − N w``;
 3. the mode classifier (:mod:`.mode`) on those margins;
-4. the kinematic estimator (:mod:`.kinematics`) under the classified modes.
+4. the kinematic estimator (:mod:`.kinematics`) under the classified modes, except for ground-slide
+   reports the kinematics cannot act on (:func:`kinematic_modes`): the paper's warm start regresses
+   the ground contact while the controller enforces sticking, and the regression's own innovation
+   gate, not the conservative report, tells when the contact really moved.
 
 Samples with a non-finite pose or wrench (sensor dropouts) change nothing: the previous estimate is
 returned with the new time and ``skipped=True``. A recording of ``(time, hand_pose, hand_wrench)`` can
@@ -182,7 +185,7 @@ class Estimator:
         cone_rows, cone_bounds, margins = self._cone(theta_h, friction.mu_h, friction.l_h_eff, ground, wrench)
         valid = [friction.valid, friction.valid, True, True, ground.valid, ground.valid]  # order: Row
         modes = self.classifier.update(time, margins.tolist(), valid)
-        kinematics = self.kinematics.update(pose, e_n, e_t, modes, in_contact)
+        kinematics = self.kinematics.update(pose, e_n, e_t, kinematic_modes(modes, ground), in_contact)
         row_valid = np.array(valid)
         wrench.flags.writeable = False
         row_valid.flags.writeable = False
@@ -233,6 +236,26 @@ class Estimator:
         if self._last is None:
             return _empty_estimate(time, self.friction, self.ground)
         return dataclasses.replace(self._last, time=float(time), skipped=True)
+
+
+def kinematic_modes(modes: ContactConfiguration, ground: GroundCone) -> ContactConfiguration:
+    """The configuration the kinematic estimator works under.
+
+    The classifier is conservative: it reports the ground "may be sliding" near any boundary of the
+    data hull, including before a friction face was ever seen (the prior rows) and while the hull is
+    still the extent of the data rather than the cone. Right for the controller and the record, but
+    it would keep the regression from ever starting — a ground slide is often not even possible at
+    the start (see the feasibility study). So a ground-slide report is kept only in the paper's rigid
+    case (the hand reported sticking) towards a fitted face of a valid cone; otherwise the
+    kinematics assume the ground sticks, and their innovation gate tells when it really moved. Both
+    contacts sliding is never commanded. Hand reports go through unchanged: the kinematic estimator
+    uses them only to lower its ``s_h`` gate.
+    """
+    side = {ContactMode.SLIDE_POS: 0, ContactMode.SLIDE_NEG: 1}.get(modes.ground_mode)
+    if side is None:
+        return modes
+    trusted = ground.valid and ground.fitted[side] and modes.hand_mode == ContactMode.STICK
+    return modes if trusted else dataclasses.replace(modes, ground_mode=ContactMode.STICK)
 
 
 def _empty_estimate(time: float, friction: HandFrictionEstimator, ground: GroundConeEstimator) -> Estimate:

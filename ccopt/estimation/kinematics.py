@@ -30,6 +30,14 @@ better: for a rigid rotation about the ground contact sampled every 0.5° with 0
 standard deviation of ``d`` and ``y_o`` after 20° of rotation drops from ~9 mm to ~0.4 mm.
 ``θ_o = θ_h`` while flush. Estimates are *valid* when their posterior standard deviation (with the
 assumed ``position_noise``) is at most ``valid_std``.
+
+Innovation gate: a contact the modes call sticking that really moved shows up as an innovation the
+noise cannot explain (``gate`` predicted standard deviations), tested on every sample. An eq. 21
+sample beyond it while the hand is reported sticking means the hand slid all the same: ``s_h`` is
+released and re-estimated from that sample, as while it is reported sliding. An eq. 20 sample beyond
+the gate is not used; ``slip_samples`` such samples in a row mean the ground contact moved, and the
+estimate is reset (the motion was not what the modes said). Kinematics alone cannot tell a ground
+slip along ``e_t`` from a hand slide (both move the hand along ``e_t``); such a slip is read as one.
 """
 
 from __future__ import annotations
@@ -41,7 +49,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ccopt import geometry
-from ccopt.estimation.quantile import check_number
+from ccopt.estimation.quantile import check_count, check_number
 from ccopt.modes import ContactConfiguration, ContactMode, HandGeometry
 
 D, X_O, Y_O, S_H = range(4)
@@ -61,6 +69,9 @@ class KinematicsParams:
             including the effect of the angle noise.
         prior_std: standard deviation of an unknown before any data (m).
         valid_std: estimates are valid once their standard deviation is at most this (m).
+        gate: an eq. 20 innovation beyond this many predicted standard deviations is rejected; an
+            eq. 21 one means the hand slid.
+        slip_samples: this many rejected eq. 20 samples in a row reset the estimate.
     """
 
     half_length: float = 0.05
@@ -68,6 +79,8 @@ class KinematicsParams:
     position_noise: float = 5e-4
     prior_std: float = 1.0
     valid_std: float = 3e-3
+    gate: float = 6.0
+    slip_samples: int = 3
 
     def __post_init__(self) -> None:
         check_number("half_length", self.half_length)
@@ -75,6 +88,8 @@ class KinematicsParams:
         check_number("position_noise", self.position_noise)
         check_number("prior_std", self.prior_std)
         check_number("valid_std", self.valid_std)
+        check_number("gate", self.gate)
+        check_count("slip_samples", self.slip_samples)
 
 
 @dataclass(frozen=True)
@@ -124,6 +139,7 @@ class KinematicEstimator:
         self._s_h_released = True
         self._theta_o = math.nan
         self._theta_o_valid = False
+        self._rejected = 0  # eq. 20 samples rejected in a row by the innovation gate
 
     def update(
         self,
@@ -153,7 +169,7 @@ class KinematicEstimator:
             pivot_ok = self._pivot(hand_pose, int(modes.hand_geometry))
         elif flush and hand_sticks:
             self._release(X_O, Y_O)
-            self._measure(pose, normal, tangent, use_normal=True, use_tangent=True)
+            self._measure(pose, normal, tangent)
             self._theta_o, self._theta_o_valid = pose[2], True
         else:
             self.reset()
@@ -164,16 +180,21 @@ class KinematicEstimator:
     def _regress(
         self, pose: list[float], normal: list[float], tangent: list[float], hand_sticks: bool
     ) -> None:
-        """Ground sticking, hand flush: eq. 20 on excitation, eq. 21 when it tells something."""
-        if not hand_sticks:
-            self._release(S_H)
+        """Ground sticking, hand flush: eq. 20 on excitation; eq. 21 tracks ``s_h`` (see the docstring)."""
         last = self._last_theta
         excited = (
             math.isnan(last) or abs(math.remainder(pose[2] - last, math.tau)) >= self.params.excitation_angle
         )
-        use_tangent = (excited and hand_sticks) or self._s_h_released
-        if excited or use_tangent:
-            self._measure(pose, normal, tangent, use_normal=excited, use_tangent=use_tangent)
+        if excited:
+            self._measure_normal(pose, normal)
+        row = (0.0, tangent[0], tangent[1], -1.0)
+        value = pose[0] * tangent[0] + pose[1] * tangent[1]
+        if not hand_sticks or self._s_h_released or not self._consistent(row, value, self.params.gate):
+            self._release(S_H)  # reported sliding, unknown, or slid although reported sticking
+            self._scalar_update(row, value)
+            self._s_h_released = False
+        elif excited:
+            self._scalar_update(row, value)
 
     def _pivot(self, hand_pose: np.ndarray, sign: int) -> bool:
         """Ground sticking, hand pivoting about its ``sign`` end: ``θ_o`` and ``s_h`` from geometry."""
@@ -202,26 +223,30 @@ class KinematicEstimator:
         if S_H in indices:
             self._s_h_released = True
 
-    def _measure(
-        self,
-        pose: list[float],
-        normal: list[float],
-        tangent: list[float],
-        use_normal: bool,
-        use_tangent: bool,
-    ) -> None:
-        """Kalman update with eq. 20 (``use_normal``) and/or eq. 21 (``use_tangent``).
+    def _measure(self, pose: list[float], normal: list[float], tangent: list[float]) -> None:
+        """Kalman update with eq. 20 (gated, :meth:`_measure_normal`), then eq. 21."""
+        self._measure_normal(pose, normal)
+        self._scalar_update((0.0, tangent[0], tangent[1], -1.0), pose[0] * tangent[0] + pose[1] * tangent[1])
+        self._s_h_released = False
 
-        The two projections of the hand position have independent noise, so they are applied one
-        after the other.
-        """
-        x_h, y_h = pose[0], pose[1]
-        if use_normal:
-            self._scalar_update((-1.0, normal[0], normal[1], 0.0), x_h * normal[0] + y_h * normal[1])
-            self._last_theta = pose[2]
-        if use_tangent:
-            self._scalar_update((0.0, tangent[0], tangent[1], -1.0), x_h * tangent[0] + y_h * tangent[1])
-            self._s_h_released = False
+    def _measure_normal(self, pose: list[float], normal: list[float]) -> None:
+        """Eq. 20 through the innovation gate; ``slip_samples`` rejections in a row reset the estimate."""
+        row, value = (-1.0, normal[0], normal[1], 0.0), pose[0] * normal[0] + pose[1] * normal[1]
+        if not self._consistent(row, value, self.params.gate):
+            self._rejected += 1
+            if self._rejected >= self.params.slip_samples:
+                self.reset()
+            return
+        self._rejected = 0
+        self._scalar_update(row, value)
+        self._last_theta = pose[2]
+
+    def _consistent(self, row: tuple[float, float, float, float], value: float, gate: float) -> bool:
+        """Whether ``row · x = value`` is within ``gate`` predicted standard deviations of the estimate."""
+        cov, state = self._cov, self._state
+        predicted = sum(h * sum(r[j] * row[j] for j in range(4)) for h, r in zip(row, cov, strict=True))
+        innovation = value - sum(h * x for h, x in zip(row, state, strict=True))
+        return innovation * innovation <= gate * gate * (predicted + self._noise_variance)
 
     def _scalar_update(self, row: tuple[float, float, float, float], value: float) -> None:
         """Kalman update with one measurement ``row · x = value`` (noise variance ``position_noise²``)."""
