@@ -99,11 +99,13 @@ def _command_run(args: argparse.Namespace, prog: str) -> int:
             "start": asdict(params.start),
         },
     }
+    infeasible = check_schedule(obj, schedule, params, meta)
     result = closed_loop_with_progress(closed_loop, obj, schedule, params, args, folder, meta)
     loaded = record.load_record(folder)
     summary = metrics.summarize(
         loaded.data, loaded.meta.get("steps", []), len(schedule.steps), result.sim_time, result.wall_time
     )
+    summary["physically_infeasible_steps"] = infeasible
     record.write_summary(folder, summary)
     print_summary(summary, folder, interrupted=result.interrupted)
     if not args.no_figures and loaded.data:
@@ -114,16 +116,32 @@ def _command_run(args: argparse.Namespace, prog: str) -> int:
     return 130 if result.interrupted else 0
 
 
+def check_schedule(obj: PlanarObject, schedule, params, meta: dict) -> list[int]:
+    """Warn about the steps no controller could do on this object (the experimenter's check).
+
+    Uses the true object through :func:`studies.feasibility.schedule_feasibility`; the result goes to
+    ``meta.json`` (``feasibility``) and the indices of the infeasible steps are returned.
+    """
+    from studies.feasibility import schedule_feasibility
+
+    checks = schedule_feasibility(obj, schedule, params)
+    meta["feasibility"] = [asdict(check) for check in checks]
+    infeasible = [check for check in checks if not check.feasible]
+    for check in infeasible:
+        print(f"warning: not physically possible for this object: {check.describe()}", file=sys.stderr)
+    return [check.index for check in infeasible]
+
+
 def closed_loop_with_progress(closed_loop, obj, schedule, params, args, folder, meta):
     """Run with a tqdm bar over the schedule's steps (unless ``--no-progress``)."""
     from tqdm import tqdm
 
-    with tqdm(total=len(schedule.steps), unit="step", disable=args.no_progress, leave=False) as bar:
+    bar = tqdm(total=len(schedule.steps), unit="step", disable=args.no_progress, leave=False, mininterval=0.5)
+    with bar:
 
         def on_tick(sim_time: float, index: int, total: int) -> None:
-            bar.n = min(index, total)
             bar.set_postfix(sim=f"{sim_time:.1f}s", refresh=False)
-            bar.refresh()
+            bar.update(min(index, total) - bar.n)  # redraws at most every mininterval
 
         return closed_loop.run(obj, schedule, params, seed=args.seed, out=folder, meta=meta, on_tick=on_tick)
 
@@ -148,6 +166,7 @@ def print_summary(summary: dict, folder: Path, interrupted: bool) -> None:
             f"[{stat('ratio_realised_commanded', 'q25')}, {stat('ratio_realised_commanded', 'q75')}]",
         ),
         ("unintended slips", str(summary["unintended_slips"])),
+        ("physically infeasible steps", str(summary.get("physically_infeasible_steps", "not checked"))),
         ("sim / wall time (s)", f"{summary['sim_time_s']:.1f} / {summary['wall_time_s']:.1f}"),
     ]
     if interrupted:

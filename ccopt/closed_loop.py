@@ -122,6 +122,13 @@ def make_plant(kind: PlantKind, obj: PlanarObject, params: PlantParams, start: S
     return PandaPlant(obj, params, start)
 
 
+def start_config(obj: PlanarObject, params: LoopParams) -> StartConfig:
+    """The configuration a run of ``params`` on ``obj`` starts in (``centre_hand`` applied)."""
+    if params.centre_hand:
+        return hand_over_vertex(obj, params.start, params.plant_params.l_h)
+    return params.start
+
+
 def estimator_params(half_length: float) -> EstimatorParams:
     """Default estimator parameters for a hand of half-length ``half_length`` (m)."""
     return EstimatorParams(
@@ -230,10 +237,7 @@ def run(
     Ctrl-C ends the run early: the record is closed with status ``interrupted`` and the result says so.
     """
     params = params or LoopParams()
-    start = (
-        hand_over_vertex(obj, params.start, params.plant_params.l_h) if params.centre_hand else params.start
-    )
-    plant = make_plant(params.plant, obj, params.plant_params, start)
+    plant = make_plant(params.plant, obj, params.plant_params, start_config(obj, params))
     sensors = Sensors(plant, params.sensor_params, seed)
     estimator = Estimator(params.estimator_params or estimator_params(params.plant_params.l_h))
     controller = Controller(params.controller_params)

@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import dataclasses
 import itertools
 import math
 import sys
@@ -49,11 +50,15 @@ import casadi as ca
 import cvxpy as cp
 import numpy as np
 
-from ccopt import contact, geometry, modes
+from ccopt import closed_loop, contact, geometry, modes
 from ccopt.casadi_eval import BufferedFunction
 from ccopt.cliutil import fail, print_table
+from ccopt.closed_loop import LoopParams
 from ccopt.contact import Row
 from ccopt.modes import Motion
+from ccopt.objects import PlanarObject
+from ccopt.plant.mujoco_planar import face_s_h_range, start_poses
+from ccopt.schedule import Schedule
 from studies import runner
 
 MOTIONS: tuple[Motion, ...] = tuple(Motion)
@@ -214,6 +219,95 @@ def is_feasible(params: FeasibilityParams, motion: Motion | str) -> tuple[bool, 
     """
     margin, _ = best_wrench(params, Motion(motion))
     return margin >= params.min_margin, margin
+
+
+# --- a schedule on a known object ----------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class StepFeasibility:
+    """Whether one schedule step is physically possible at its nominal configuration.
+
+    The nominal configuration is where the step starts and ends if every earlier step did exactly what
+    it commanded: ``θ_o`` moved by the pivots, ``s_h`` by the hand slides (``d`` and the centre of mass
+    are fixed in the face frame). Angles in rad, lengths in m, margins in N (see :func:`is_feasible`).
+
+    Attributes:
+        index: position of the step in the schedule.
+        kind: the step's kind (``pivot``, ``slide_hand``, ``slide_ground``, ``hold``).
+        delta: its increment (rad or m).
+        theta_o: nominal ``θ_o`` at the start and at the end of the step.
+        s_h: nominal ``s_h`` at the start and at the end of the step.
+        on_face: the whole hand stays on the face over the step.
+        margin: the smaller LP margin of the step's two ends.
+        feasible: ``on_face`` and ``margin ≥ min_margin``.
+    """
+
+    index: int
+    kind: str
+    delta: float
+    theta_o: tuple[float, float]
+    s_h: tuple[float, float]
+    on_face: bool
+    margin: float
+    feasible: bool
+
+    def describe(self) -> str:
+        """One line in degrees and millimetres, e.g. for a warning."""
+        unit, scale = ("deg", math.degrees(1.0)) if self.kind == "pivot" else ("mm", 1e3)
+        why = "the hand leaves the face" if not self.on_face else f"LP margin {self.margin:.2f} N"
+        return (
+            f"step {self.index} ({self.kind} {self.delta * scale:+.1f} {unit}) at θ_o "
+            f"{math.degrees(self.theta_o[0]):.1f}→{math.degrees(self.theta_o[1]):.1f} deg, s_h "
+            f"{1e3 * self.s_h[0]:.1f}→{1e3 * self.s_h[1]:.1f} mm: {why}"
+        )
+
+
+def schedule_feasibility(
+    obj: PlanarObject, schedule: Schedule, params: LoopParams, min_margin: float = 0.3
+) -> tuple[StepFeasibility, ...]:
+    """Check every step of ``schedule`` on the known ``obj`` as a run of ``params`` would start it.
+
+    This is the experimenter's check, not the controller's: it uses the true object (polygon, mass,
+    friction), which ccopt's estimator and controller never see. A step that is infeasible here
+    cannot be done by any controller with a flush hand and a point ground contact; a step that is
+    feasible may still fail (the reduced model ignores dynamics, and the object may roll onto
+    another vertex at large angles).
+    """
+    start = closed_loop.start_config(obj, params)
+    object_pose, hand_pose, _ = start_poses(obj, start, params.plant_params)
+    r_o = np.array([start.x_o, 0.0])
+    _, d = geometry.contact_coordinates(hand_pose, r_o)
+    com = object_pose[:2] - r_o
+    base = FeasibilityParams(
+        mu_hand=obj.mu_hand,
+        mu_ground=obj.mu_ground,
+        mass=obj.mass,
+        d=d,
+        com_along=float(com @ geometry.hand_tangent(start.theta_o)),
+        com_height=float(-(com @ geometry.hand_normal(start.theta_o))),
+        l_h=params.plant_params.l_h,
+        f_min=params.controller_params.force_limits[0],
+        f_max=params.controller_params.force_limits[1],
+        min_margin=min_margin,
+    )
+    low, high = face_s_h_range(obj, start)
+    inset = params.plant_params.l_h
+    theta, s_h = start.theta_o, start.s_h
+    checks = []
+    for index, step in enumerate(schedule.steps):
+        end_theta = theta + (step.delta if step.kind == "pivot" else 0.0)
+        end_s_h = s_h + (step.delta if step.kind == "slide_hand" else 0.0)
+        on_face = all(low + inset - 1e-9 <= s <= high - inset + 1e-9 for s in (s_h, end_s_h))
+        margin = min(
+            is_feasible(dataclasses.replace(base, theta_o=t, s_h=s), step.motion)[1]
+            for t, s in ((theta, s_h), (end_theta, end_s_h))
+        )
+        feasible = on_face and margin >= min_margin
+        ends = ((theta, end_theta), (s_h, end_s_h))
+        checks.append(StepFeasibility(index, step.kind, step.delta, *ends, on_face, margin, feasible))
+        theta, s_h = end_theta, end_s_h
+    return tuple(checks)
 
 
 # --- trials ---------------------------------------------------------------------------------------

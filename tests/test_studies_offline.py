@@ -209,3 +209,29 @@ def test_out_must_be_a_folder(tmp_path, capsys):
         studies_main(["gradients", "--out", str(blocker)])
     assert exit_info.value.code == 2
     assert "not a folder" in capsys.readouterr().err
+
+
+def test_schedule_check_agrees_with_the_simulated_closed_loop():
+    """A hand slide the statics rule out on the light triangle (its friction moment about the ground
+    vertex needs more torque than a flush 6 cm hand can give) is one the closed loop cannot do flush,
+    while the pivot the check accepts is done as commanded; the check uses the true object, MuJoCo
+    decides independently."""
+    from ccopt import closed_loop, metrics
+    from ccopt.closed_loop import LoopParams
+    from ccopt.objects import make_object
+    from ccopt.schedule import Schedule, hold, pivot, slide_hand
+    from studies.feasibility import schedule_feasibility
+
+    obj = make_object("paper-triangle")
+    schedule = Schedule("check", (hold(0.3), pivot(7.2), slide_hand(10.0)))
+    checks = schedule_feasibility(obj, schedule, LoopParams())
+    assert [c.feasible for c in checks] == [True, True, False]
+    assert checks[2].on_face and checks[2].margin < 0.0
+    result = closed_loop.run(obj, schedule, seed=0)
+    steps = [vars(step) for step in result.steps]
+    ratios = metrics.realised_ratios(result.samples, steps)
+    assert 0.85 < ratios[0] < 1.15  # the pivot
+    failed_slide = ratios[1] < 0.85 or any(
+        event["step"] == 2 for event in metrics.unintended_slips(result.samples, steps)
+    )
+    assert failed_slide, (ratios, metrics.unintended_slips(result.samples, steps))
