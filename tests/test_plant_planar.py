@@ -328,3 +328,13 @@ def test_bad_start_and_commands_raise_clear_errors() -> None:
         plant.push_object([1.0, 2.0, 3.0], 0.1)
     with pytest.raises(ValueError, match="n_steps must be a non-negative integer, got -1"):
         plant.step(-1)
+
+
+@pytest.mark.parametrize(
+    ("arguments", "name"),
+    [(("square",), "obj"), ((None,), "obj"), ((make_object("paper-square"), "x"), "params"),
+     ((make_object("paper-square"), None, {}), "start")],
+)
+def test_wrong_argument_types_raise_a_type_error_naming_them(arguments, name):
+    with pytest.raises(TypeError, match=f"^{name} must be a"):
+        PlanarPlant(*arguments)

@@ -15,6 +15,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ccopt.objects import PlanarObject
 from ccopt.plant.truth import Truth
 
 
@@ -156,6 +157,19 @@ class StartConfig:
         if settle < 0.0:
             raise ValueError(f"settle_time must be non-negative, got {settle!r}")
         object.__setattr__(self, "settle_time", settle)
+
+
+def plant_inputs(
+    obj: object, params: object, start: object
+) -> tuple[PlanarObject, PlantParams, StartConfig]:
+    """A plant's constructor arguments with defaults filled in; ``TypeError`` naming a wrong one."""
+    params = PlantParams() if params is None else params
+    start = StartConfig() if start is None else start
+    expected = (("obj", obj, PlanarObject), ("params", params, PlantParams), ("start", start, StartConfig))
+    for name, value, kind in expected:
+        if not isinstance(value, kind):
+            raise TypeError(f"{name} must be a {kind.__name__}, got {type(value).__name__} {value!r}")
+    return obj, params, start
 
 
 @runtime_checkable

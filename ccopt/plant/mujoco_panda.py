@@ -42,7 +42,7 @@ from numpy.typing import ArrayLike
 from ccopt import geometry
 from ccopt.objects import PlanarObject
 from ccopt.plant import scene
-from ccopt.plant.base import PlantParams, StartConfig, planar_vector
+from ccopt.plant.base import PlantParams, StartConfig, planar_vector, plant_inputs
 from ccopt.plant.mujoco_planar import start_poses
 from ccopt.plant.truth import Truth, compute_truth
 from panda_model.hand import HandPlate, Mount
@@ -192,9 +192,7 @@ class PandaPlant:
         *,
         panda: PandaParams | None = None,
     ) -> None:
-        self.obj = obj
-        self.params = params or PlantParams()
-        self.start = start or StartConfig()
+        self.obj, self.params, self.start = plant_inputs(obj, params, start)
         self.panda_params = panda or PandaParams()
         self.hand = hand_plate(self.params)
         self.panda: Panda = load_panda(self.hand, self.panda_params.mount, self.panda_params.armature)

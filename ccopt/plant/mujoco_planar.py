@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 from ccopt import geometry
 from ccopt.objects import PlanarObject
 from ccopt.plant import scene
-from ccopt.plant.base import PlantParams, StartConfig, planar_vector
+from ccopt.plant.base import PlantParams, StartConfig, planar_vector, plant_inputs
 from ccopt.plant.truth import Truth, compute_truth, lowest_vertex
 
 HAND_BODY = "hand"
@@ -175,9 +175,7 @@ class PlanarPlant:
         params: PlantParams | None = None,
         start: StartConfig | None = None,
     ) -> None:
-        self.obj = obj
-        self.params = params or PlantParams()
-        self.start = start or StartConfig()
+        self.obj, self.params, self.start = plant_inputs(obj, params, start)
         object_pose, hand_pose, target = start_poses(obj, self.start, self.params)
         self._model = mujoco.MjModel.from_xml_string(planar_model_xml(obj, self.params))
         self._data = mujoco.MjData(self._model)
