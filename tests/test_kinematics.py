@@ -158,10 +158,14 @@ def test_an_unreported_hand_slide_is_caught_by_the_innovation_gate():
     """The modes say sticking, the hand really slides: eq. 21's innovations re-estimate ``s_h``."""
     estimator, rng = KinematicEstimator(), np.random.default_rng(11)
     pivot_about_ground(estimator, rng)
-    for s_h in np.linspace(S_H, S_H + 0.02, 200):
+    positions = np.linspace(S_H, S_H + 0.02, 200)
+    for s_h in positions:
         estimate = step(estimator, measured(geometry.hand_pose_from_contact(0.05, s_h, D, R_O), rng))
-    gate_width = KinematicsParams().gate * math.hypot(KinematicsParams().position_noise, 1e-3)
-    assert estimate.s_h_valid and abs(estimate.s_h - (S_H + 0.02)) < gate_width
+    # s_h lags until the innovation crosses the gate: `gate` predicted standard deviations, which just
+    # after a re-estimate are √2 × the measurement noise, plus the slide of one sample
+    params = KinematicsParams()
+    lag_bound = params.gate * math.sqrt(2.0) * params.position_noise + (positions[1] - positions[0])
+    assert estimate.s_h_valid and abs(estimate.s_h - positions[-1]) < lag_bound  # 4.3 mm; 20 mm if missed
     assert abs(estimate.d - D) < 1e-3 and np.all(np.abs(estimate.r_o - R_O) < 1e-3)
 
 

@@ -248,14 +248,22 @@ def kinematic_modes(modes: ContactConfiguration, ground: GroundCone) -> ContactC
     the start (see the feasibility study). So a ground-slide report is kept only in the paper's rigid
     case (the hand reported sticking) towards a fitted face of a valid cone; otherwise the
     kinematics assume the ground sticks, and their innovation gate tells when it really moved. Both
-    contacts sliding is never commanded. Hand reports go through unchanged: the kinematic estimator
-    uses them only to lower its ``s_h`` gate.
+    contacts sliding is never commanded. Hand reports go through unchanged (a reported hand slide
+    releases ``s_h``).
     """
     side = {ContactMode.SLIDE_POS: 0, ContactMode.SLIDE_NEG: 1}.get(modes.ground_mode)
     if side is None:
         return modes
     trusted = ground.valid and ground.fitted[side] and modes.hand_mode == ContactMode.STICK
-    return modes if trusted else dataclasses.replace(modes, ground_mode=ContactMode.STICK)
+    return modes if trusted else _GROUND_STICKING[modes.hand_mode, modes.hand_geometry]
+
+
+_GROUND_STICKING = {
+    (hand, geometry_sign): ContactConfiguration(ContactMode(hand), HandGeometry(geometry_sign))
+    for hand in (-1, 0, 1)
+    for geometry_sign in (-1, 0, 1)
+}
+"""Every configuration with the ground sticking, by ``(hand mode, hand geometry)`` (immutable)."""
 
 
 def _empty_estimate(time: float, friction: HandFrictionEstimator, ground: GroundConeEstimator) -> Estimate:

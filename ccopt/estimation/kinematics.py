@@ -55,6 +55,8 @@ from ccopt.modes import ContactConfiguration, ContactMode, HandGeometry
 D, X_O, Y_O, S_H = range(4)
 """Indices of the estimated state ``(d, x_o, y_o, s_h)``."""
 _CONTACT = (D, X_O, Y_O)
+_Prediction = tuple[tuple[float, float, float, float], float, float]
+"""``(P hᵀ, innovation, innovation variance)`` of one scalar measurement."""
 _PIVOT_ITERATIONS = 8
 
 
@@ -129,6 +131,7 @@ class KinematicEstimator:
         self.params = params if params is not None else KinematicsParams()
         self._noise_variance = self.params.position_noise**2
         self._prior_variance = self.params.prior_std**2
+        self._gate_squared = self.params.gate**2
         self.reset()
 
     def reset(self) -> None:
@@ -189,12 +192,13 @@ class KinematicEstimator:
             self._measure_normal(pose, normal)
         row = (0.0, tangent[0], tangent[1], -1.0)
         value = pose[0] * tangent[0] + pose[1] * tangent[1]
-        if not hand_sticks or self._s_h_released or not self._consistent(row, value, self.params.gate):
+        prediction = self._predict(row, value)
+        if not hand_sticks or self._s_h_released or not self._consistent(prediction):
             self._release(S_H)  # reported sliding, unknown, or slid although reported sticking
             self._scalar_update(row, value)
             self._s_h_released = False
         elif excited:
-            self._scalar_update(row, value)
+            self._apply(prediction)
 
     def _pivot(self, hand_pose: np.ndarray, sign: int) -> bool:
         """Ground sticking, hand pivoting about its ``sign`` end: ``θ_o`` and ``s_h`` from geometry."""
@@ -232,36 +236,46 @@ class KinematicEstimator:
     def _measure_normal(self, pose: list[float], normal: list[float]) -> None:
         """Eq. 20 through the innovation gate; ``slip_samples`` rejections in a row reset the estimate."""
         row, value = (-1.0, normal[0], normal[1], 0.0), pose[0] * normal[0] + pose[1] * normal[1]
-        if not self._consistent(row, value, self.params.gate):
+        prediction = self._predict(row, value)
+        if not self._consistent(prediction):
             self._rejected += 1
             if self._rejected >= self.params.slip_samples:
                 self.reset()
             return
         self._rejected = 0
-        self._scalar_update(row, value)
+        self._apply(prediction)
         self._last_theta = pose[2]
 
-    def _consistent(self, row: tuple[float, float, float, float], value: float, gate: float) -> bool:
-        """Whether ``row · x = value`` is within ``gate`` predicted standard deviations of the estimate."""
-        cov, state = self._cov, self._state
-        predicted = sum(h * sum(r[j] * row[j] for j in range(4)) for h, r in zip(row, cov, strict=True))
-        innovation = value - sum(h * x for h, x in zip(row, state, strict=True))
-        return innovation * innovation <= gate * gate * (predicted + self._noise_variance)
+    def _consistent(self, prediction: _Prediction) -> bool:
+        """Whether the innovation is within ``gate`` predicted standard deviations."""
+        _, innovation, variance = prediction
+        return innovation * innovation <= self._gate_squared * variance
 
-    def _scalar_update(self, row: tuple[float, float, float, float], value: float) -> None:
-        """Kalman update with one measurement ``row · x = value`` (noise variance ``position_noise²``)."""
+    def _predict(self, row: tuple[float, float, float, float], value: float) -> _Prediction:
+        """``(P hᵀ, innovation, innovation variance)`` of one measurement ``row · x = value``."""
         h0, h1, h2, h3 = row
-        cov, state = self._cov, self._state
-        c0, c1, c2, c3 = (r[0] * h0 + r[1] * h1 + r[2] * h2 + r[3] * h3 for r in cov)  # P hᵀ
-        scale = 1.0 / (c0 * h0 + c1 * h1 + c2 * h2 + c3 * h3 + self._noise_variance)
+        state = self._state
+        c0, c1, c2, c3 = (r[0] * h0 + r[1] * h1 + r[2] * h2 + r[3] * h3 for r in self._cov)  # P hᵀ
+        variance = c0 * h0 + c1 * h1 + c2 * h2 + c3 * h3 + self._noise_variance
         innovation = value - (state[0] * h0 + state[1] * h1 + state[2] * h2 + state[3] * h3)
-        for i, (r, c) in enumerate(zip(cov, (c0, c1, c2, c3), strict=True)):
+        return (c0, c1, c2, c3), innovation, variance
+
+    def _apply(self, prediction: _Prediction) -> None:
+        """Kalman update with a :meth:`_predict`-ed measurement (noise variance ``position_noise²``)."""
+        (c0, c1, c2, c3), innovation, variance = prediction
+        scale = 1.0 / variance
+        state = self._state
+        for i, (r, c) in enumerate(zip(self._cov, (c0, c1, c2, c3), strict=True)):
             gain = c * scale
             state[i] += gain * innovation
             r[0] -= gain * c0
             r[1] -= gain * c1
             r[2] -= gain * c2
             r[3] -= gain * c3
+
+    def _scalar_update(self, row: tuple[float, float, float, float], value: float) -> None:
+        """Kalman update with one measurement ``row · x = value``, ungated."""
+        self._apply(self._predict(row, value))
 
     def _standard_deviations(self) -> tuple[float, ...]:
         return tuple(math.sqrt(max(self._cov[i][i], 0.0)) for i in range(4))
