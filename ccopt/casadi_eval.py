@@ -3,55 +3,84 @@
 A plain ``casadi.Function`` call with NumPy arguments converts every argument to ``DM`` and costs
 tens of microseconds. :class:`BufferedFunction` binds preallocated, contiguous NumPy arrays to a
 ``FunctionBuffer`` once and then evaluates through a ctypes pointer: a call is a few array copies
-plus the function's own work. One instance is not thread-safe (it owns its buffers); processes and
-threads should each build their own.
+plus the function's own work. Each thread binds its own buffers on first use, so one instance (for
+example a module-level one) can be shared by the threads of a Dask worker.
 """
 
 from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
 
+@dataclass(frozen=True)
+class _Binding:
+    """One thread's buffers: column-major arrays bound to a ``FunctionBuffer``, and its evaluator."""
+
+    inputs: list[np.ndarray]
+    outputs: list[np.ndarray]
+    buffer: object  # keeps the FunctionBuffer alive while ``evaluate`` points into it
+    evaluate: Callable[[], None]
+
+
+def _bind(function: ca.Function) -> _Binding:
+    inputs = [np.zeros(function.size_in(i), order="F") for i in range(function.n_in())]
+    outputs = [np.zeros(function.size_out(i), order="F") for i in range(function.n_out())]
+    buffer, evaluate = function.buffer()
+    for i, array in enumerate(inputs):
+        buffer.set_arg(i, memoryview(array.reshape(-1, order="F")))
+    for i, array in enumerate(outputs):
+        buffer.set_res(i, memoryview(array.reshape(-1, order="F")))
+    return _Binding(inputs, outputs, buffer, evaluate)
+
+
 class BufferedFunction:
-    """Evaluate ``function`` on NumPy inputs through preallocated buffers.
+    """Evaluate ``function`` on NumPy inputs through preallocated buffers (one set per thread).
 
     Inputs are copied into column-major (CasADi order) buffers; outputs are returned as fresh
     arrays shaped like the function's outputs (vectors as 1-D, matrices as 2-D).
     """
 
     def __init__(self, function: ca.Function) -> None:
-        function = _densified(function)
-        self.function = function
-        self._inputs = [np.zeros(function.size_in(i), order="F") for i in range(function.n_in())]
-        self._outputs = [np.zeros(function.size_out(i), order="F") for i in range(function.n_out())]
-        self._buffer, self._evaluate = function.buffer()
-        for i, array in enumerate(self._inputs):
-            self._buffer.set_arg(i, memoryview(array.reshape(-1, order="F")))
-        for i, array in enumerate(self._outputs):
-            self._buffer.set_res(i, memoryview(array.reshape(-1, order="F")))
+        self.function = _densified(function)
+        self._n_in = self.function.n_in()
+        self._local = threading.local()
 
     @property
     def name(self) -> str:
         return self.function.name()
 
+    def _binding(self) -> _Binding:
+        """This thread's buffers, bound on the thread's first call."""
+        try:
+            return self._local.binding
+        except AttributeError:
+            self._local.binding = _bind(self.function)
+            return self._local.binding
+
     def __call__(self, *args: ArrayLike) -> tuple[np.ndarray, ...]:
-        if len(args) != len(self._inputs):
-            raise TypeError(f"{self.name} takes {len(self._inputs)} arguments, got {len(args)}")
-        for buffer, value in zip(self._inputs, args, strict=True):
+        if len(args) != self._n_in:
+            raise TypeError(f"{self.name} takes {self._n_in} arguments, got {len(args)}")
+        binding = self._binding()
+        for buffer, value in zip(binding.inputs, args, strict=True):
             buffer[...] = np.reshape(value, buffer.shape, order="F")
-        self._evaluate()
-        return tuple(_squeeze(out.copy(order="C")) for out in self._outputs)
+        binding.evaluate()
+        return tuple(_squeeze(out.copy(order="C")) for out in binding.outputs)
 
     def call_flat(self, flat_input: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """Fast path for one-input, one-output functions: copy ``flat_input`` in, return output 0.
 
         ``out``, when given, receives the result without allocation.
         """
-        self._inputs[0].reshape(-1, order="F")[:] = flat_input
-        self._evaluate()
-        result = self._outputs[0].reshape(-1, order="F")
+        binding = self._binding()
+        binding.inputs[0].reshape(-1, order="F")[:] = flat_input
+        binding.evaluate()
+        result = binding.outputs[0].reshape(-1, order="F")
         if out is None:
             return result.copy()
         out[:] = result

@@ -141,10 +141,7 @@ STATICS = _build_statics()
 """The equilibrium of the reduced model, affine in ``(w_h, f_g)``: see :func:`_build_statics`."""
 
 
-@runner.thread_cached
-def _numeric_statics() -> BufferedFunction:
-    """:data:`STATICS` behind a buffer (one per thread: a buffer is not shareable)."""
-    return BufferedFunction(STATICS)
+_NUMERIC_STATICS = BufferedFunction(STATICS)
 
 
 @dataclass(frozen=True)
@@ -196,7 +193,7 @@ def best_wrench(params: FeasibilityParams, motion: Motion) -> tuple[float, np.nd
     sliding limit at all.
     """
     program = _program(Motion(motion))
-    jacobian, offset = _numeric_statics()(
+    jacobian, offset = _NUMERIC_STATICS(
         params.theta_o, params.s_h, params.d, params.com_along, params.com_height, params.mass
     )
     values = (*scaled_cone(params), jacobian, offset, np.array([params.f_min, params.f_max]))

@@ -15,7 +15,7 @@ that raises becomes ``{"error": "<one line>"}``. Every finished trial is appende
 ``trials.jsonl`` in the study's folder, so an interrupted study keeps what it finished.
 
 Trial functions may run in several threads of one Dask worker at once: per-process state that is not
-thread-safe (CasADi buffers, parametrised cvxpy problems, simulators) belongs in a
+thread-safe (parametrised cvxpy problems, simulators) belongs in a
 :func:`thread_cached` builder.
 
 Each study module has ``main(argv) -> int``; :func:`study_modules` is the registry behind
@@ -215,7 +215,7 @@ def thread_cached(build: Callable[..., T]) -> Callable[..., T]:
     """Decorator: call ``build(*args)`` once per thread and argument tuple, then reuse its result.
 
     Like :func:`functools.cache`, but each thread (each concurrent trial on a Dask worker) gets its
-    own object, for state that must not be shared: buffers, solvers with parameter values, plants.
+    own object, for state that must not be shared: solvers with parameter values, plants.
     """
 
     @functools.wraps(build)

@@ -131,3 +131,20 @@ def test_symbolic_jacobians_match_central_differences(function):
             ]
         )
         np.testing.assert_allclose(jacobian, finite, rtol=1e-6, atol=1e-8)
+
+
+def test_numeric_wrappers_give_each_thread_its_own_buffers():
+    # the module-level wrappers are shared by the threads of a Dask worker
+    from concurrent.futures import ThreadPoolExecutor
+
+    masses = np.linspace(0.1, 2.0, 64)
+
+    def cone(mass: float) -> np.ndarray:
+        rows, bounds = contact.model_friction_cone(0.2, 0.5, 0.8, 0.03, mass)
+        return np.column_stack([rows, bounds])
+
+    serial = [cone(mass) for mass in masses]
+    for _ in range(20):
+        with ThreadPoolExecutor(4) as pool:
+            for threaded, expected in zip(pool.map(cone, masses), serial, strict=True):
+                np.testing.assert_array_equal(threaded, expected)

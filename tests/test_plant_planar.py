@@ -332,8 +332,12 @@ def test_bad_start_and_commands_raise_clear_errors() -> None:
 
 @pytest.mark.parametrize(
     ("arguments", "name"),
-    [(("square",), "obj"), ((None,), "obj"), ((make_object("paper-square"), "x"), "params"),
-     ((make_object("paper-square"), None, {}), "start")],
+    [
+        (("square",), "obj"),
+        ((None,), "obj"),
+        ((make_object("paper-square"), "x"), "params"),
+        ((make_object("paper-square"), None, {}), "start"),
+    ],
 )
 def test_wrong_argument_types_raise_a_type_error_naming_them(arguments, name):
     with pytest.raises(TypeError, match=f"^{name} must be a"):

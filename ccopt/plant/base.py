@@ -159,9 +159,7 @@ class StartConfig:
         object.__setattr__(self, "settle_time", settle)
 
 
-def plant_inputs(
-    obj: object, params: object, start: object
-) -> tuple[PlanarObject, PlantParams, StartConfig]:
+def plant_inputs(obj: object, params: object, start: object) -> tuple[PlanarObject, PlantParams, StartConfig]:
     """A plant's constructor arguments with defaults filled in; ``TypeError`` naming a wrong one."""
     params = PlantParams() if params is None else params
     start = StartConfig() if start is None else start
