@@ -184,21 +184,7 @@ def test_kinematics_after_the_warm_start(recording):
     assert error[:, 2].max() < POSITION_LIMIT, error[:, 2].max()
 
 
-@pytest.mark.parametrize(
-    ("column", "contact"),
-    [
-        (0, "hand"),
-        pytest.param(
-            1,
-            "ground",
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="known gap (issue 4): ~14 % of true ground sliding reported sticking — the hull's "
-                "top (steady press) is fitted as a friction face before the object slides",
-            ),
-        ),
-    ],
-)
+@pytest.mark.parametrize(("column", "contact"), [(0, "hand"), (1, "ground")])
 def test_sliding_is_reported_sticking_on_under_two_percent(recording, column, contact, record_property):
     truth, reported = recording.truth_modes[:, column], recording.reported[:, column]
     sliding, sticking = truth != 0, truth == 0

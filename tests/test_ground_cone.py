@@ -91,6 +91,23 @@ def test_an_unexplored_side_gets_a_conservative_row():
     assert np.mean(samples @ cone.A[1] > cone.b[1] + 3 * NOISE) < 0.01
 
 
+def test_the_hulls_top_is_not_a_friction_face_after_a_slide_one_way():
+    # a steady 10 N press at ±25° (the hull's flat top), then a push that slides the object to the
+    # right along its true face: the data's centroid moves right, but only the right face is fitted
+    mu_g, mass = 0.5, 0.15
+    rng = np.random.default_rng(3)
+    angle = rng.uniform(-0.44, 0.44, 3000)
+    press = 10.0 * np.column_stack([np.sin(angle), -np.cos(angle)])
+    depth = rng.uniform(12.0, 18.0, 1500)
+    slide = -contact.weight(mass) + np.column_stack([mu_g * depth, -depth])
+    samples = np.vstack([press, slide]) + rng.normal(0.0, NOISE, (4500, 2))
+    cone = run(samples).cone
+    assert cone.fitted == (True, False)
+    assert face_slopes(cone.A[:1], 0.0)[0] == pytest.approx(mu_g, rel=0.05)
+    assert cone.b[0] == pytest.approx(true_rows(mu_g, mass, 0.0)[1][0], abs=1.0)
+    assert face_slopes(cone.A[1:], 0.0)[0] < mu_g  # the sticking data's edge (or the prior): inside
+
+
 def test_before_enough_data_rows_are_conservative_and_invalid():
     estimator = GroundConeEstimator()
     cone = estimator.cone
