@@ -160,11 +160,6 @@ def test_the_recording_exercises_every_motion_against_truth(recording):
     assert recording.mu[0] == pytest.approx(MU_H, rel=0.1)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="known gap (issue 4): s_h/s_g errors up to ~5–7 mm after the warm start — an unreported ground "
-    "slide along e_t is read as a hand slide by the kinematic innovation gate",
-)
 def test_kinematics_after_the_warm_start(recording):
     after = after_warm_start(recording)
     assert after.any(), "the kinematics never became valid"

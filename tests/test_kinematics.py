@@ -27,10 +27,11 @@ def step(
     pose: np.ndarray,
     modes: ContactConfiguration = STICK,
     in_contact: bool = True,
+    ground_may_slide: bool = False,
 ):
     theta = float(pose[2])
     normal, tangent = geometry.hand_normal(theta).tolist(), geometry.hand_tangent(theta).tolist()
-    return estimator.update(pose, normal, tangent, modes, in_contact)
+    return estimator.update(pose, normal, tangent, modes, in_contact, ground_may_slide)
 
 
 def pivot_about_ground(estimator: KinematicEstimator, rng: np.random.Generator, span_deg: float = 15.0):
@@ -184,3 +185,35 @@ def test_an_unreported_move_of_the_ground_contact_resets_instead_of_keeping_a_wr
             assert np.all(np.abs(estimate.r_o - R_O) < 1e-3) or np.all(np.abs(estimate.r_o - moved) < 1e-3)
     assert not all(outcomes)  # it noticed
     assert not estimate.contact_valid or np.all(np.abs(estimate.r_o - moved) < 1e-3)
+
+
+@pytest.mark.parametrize("theta", [0.0, 0.3])
+def test_a_ground_reported_sliding_with_a_sticking_hand_moves_r_o_not_s_h(theta):
+    """The ground "may slide" (a report the kinematics do not act on) and really slides 10 mm along
+    world x, the hand sticks: at θ = 0 that is a motion along ``e_t``, kinematically a hand slide,
+    but the sticking-hand report decides — ``r_o`` follows, ``s_h`` stays."""
+    estimator, rng = KinematicEstimator(), np.random.default_rng(13)
+    pivot_about_ground(estimator, rng)
+    params = KinematicsParams()
+    for x_o in np.linspace(R_O[0], R_O[0] + 0.01, 200):
+        r_o = np.array([x_o, R_O[1]])
+        pose = measured(geometry.hand_pose_from_contact(theta, S_H, D, r_o), rng)
+        estimate = step(estimator, pose, ground_may_slide=True)
+        # caught once the innovation crosses `slip_gate` (√2 × the noise after a re-anchoring)
+        assert abs(estimate.s_g - x_o) < params.slip_gate * math.sqrt(2.0) * params.position_noise + 1e-4
+    assert abs(estimate.s_h - S_H) < 1e-3 and abs(estimate.d - D) < 1e-3
+    assert abs(estimate.s_g - x_o) < 1e-3
+
+
+def test_a_ground_slip_while_the_hand_slides_too_gives_both_from_the_tilted_hand():
+    """Both contacts "may slide" and both do (the object 8 mm along x, the hand 6 mm along the
+    face) with the hand tilted 0.35 rad: eq. 20 sees the ground's share, eq. 21 the rest."""
+    estimator, rng = KinematicEstimator(), np.random.default_rng(14)
+    pivot_about_ground(estimator, rng)
+    theta = 0.35
+    for fraction in np.linspace(0.0, 1.0, 400):
+        r_o = R_O + np.array([0.008 * fraction, 0.0])
+        pose = measured(geometry.hand_pose_from_contact(theta, S_H + 0.006 * fraction, D, r_o), rng)
+        estimate = step(estimator, pose, HAND_SLIDES, ground_may_slide=True)
+    assert estimate.contact_valid and estimate.s_h_valid
+    assert abs(estimate.s_g - r_o[0]) < 2e-3 and abs(estimate.s_h - (S_H + 0.006)) < 2e-3

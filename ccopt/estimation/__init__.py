@@ -1,6 +1,7 @@
 """Object-agnostic estimation (paper §IV): friction cone, contact modes and kinematics from the hand
 wrench and pose alone. :class:`Estimator` is the entry point; the modules are its parts."""
 
+from ccopt.estimation.angle_filter import AngleFilter, AngleFilterParams
 from ccopt.estimation.estimator import Estimate, Estimator, EstimatorParams, replay
 from ccopt.estimation.friction import HandFrictionEstimator, HandFrictionParams
 from ccopt.estimation.ground_cone import GroundCone, GroundConeEstimator, GroundConeParams
@@ -9,6 +10,8 @@ from ccopt.estimation.mode import ModeClassifier, ModeParams
 from ccopt.estimation.quantile import P2Quantile, P2QuantileBank
 
 __all__ = [
+    "AngleFilter",
+    "AngleFilterParams",
     "Estimate",
     "Estimator",
     "EstimatorParams",

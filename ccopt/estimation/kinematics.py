@@ -19,6 +19,9 @@ ground sticks, hand flush          eq. 20 (and eq. 21 if the hand sticks, so ``s
                                    eq. 21 re-estimates it every sample
 ground slides, hand sticks, flush  ``r_o`` released and both rows used every sample: ``r_o`` moves
                                    rigidly with the hand with the last ``d`` and ``s_h``
+ground *may* slide (reported, but  as if it sticks, until an eq. 20 or eq. 21 innovation exceeds
+not acted on), hand sticks, flush  ``slip_gate`` standard deviations: then rigidly, as if it slides,
+                                   until the ground is reported sticking again
 ground sticks, hand pivots         no update; ``r_o`` and ``d`` stay, ``θ_o`` and ``s_h`` follow from
                                    the hand end on the object face (:func:`pivot_contact`)
 hand not in contact                no update; ``s_h`` released
@@ -37,7 +40,13 @@ sample beyond it while the hand is reported sticking means the hand slid all the
 released and re-estimated from that sample, as while it is reported sliding. An eq. 20 sample beyond
 the gate is not used; ``slip_samples`` such samples in a row mean the ground contact moved, and the
 estimate is reset (the motion was not what the modes said). Kinematics alone cannot tell a ground
-slip along ``e_t`` from a hand slide (both move the hand along ``e_t``); such a slip is read as one.
+slip along ``e_t`` from a hand slide (both move the hand along ``e_t``), so the reports decide: with
+the hand reported sticking and the ground reported sliding (a ground-slide report the estimator does
+not act on, see :func:`ccopt.estimation.estimator.kinematic_modes`), an unexplained motion is the
+ground's. The classifier is conservative (sliding is almost never reported sticking), so a
+sticking-hand report is the reliable one. The rigid update costs little when the ground did not
+move (``r_o`` is re-anchored to within the pose noise); the slip it catches would otherwise be read
+as a hand slide, leaving ``s_h`` and ``s_g`` wrong by the slip.
 """
 
 from __future__ import annotations
@@ -73,6 +82,12 @@ class KinematicsParams:
         valid_std: estimates are valid once their standard deviation is at most this (m).
         gate: an eq. 20 innovation beyond this many predicted standard deviations is rejected; an
             eq. 21 one means the hand slid.
+        slip_gate: with the ground reported sliding, an eq. 20 (or, with the hand sticking, an
+            eq. 21) innovation beyond this many predicted standard deviations means the ground slid.
+            Low, because a false alarm costs little (``r_o`` is re-anchored to within the noise)
+            and the default ``position_noise`` is about twice the default sensors' effective noise:
+            on a plant recording 3 let the first slide each way run 1.6–2.0 mm before it was
+            caught, 2 about 1 mm.
         slip_samples: this many rejected eq. 20 samples in a row reset the estimate.
     """
 
@@ -82,6 +97,7 @@ class KinematicsParams:
     prior_std: float = 1.0
     valid_std: float = 3e-3
     gate: float = 6.0
+    slip_gate: float = 2.0
     slip_samples: int = 3
 
     def __post_init__(self) -> None:
@@ -91,6 +107,7 @@ class KinematicsParams:
         check_number("prior_std", self.prior_std)
         check_number("valid_std", self.valid_std)
         check_number("gate", self.gate)
+        check_number("slip_gate", self.slip_gate)
         check_count("slip_samples", self.slip_samples)
 
 
@@ -132,6 +149,7 @@ class KinematicEstimator:
         self._noise_variance = self.params.position_noise**2
         self._prior_variance = self.params.prior_std**2
         self._gate_squared = self.params.gate**2
+        self._slip_gate_squared = self.params.slip_gate**2
         self.reset()
 
     def reset(self) -> None:
@@ -143,6 +161,7 @@ class KinematicEstimator:
         self._theta_o = math.nan
         self._theta_o_valid = False
         self._rejected = 0  # eq. 20 samples rejected in a row by the innovation gate
+        self._ground_slipping = False  # a ground slip was seen and the ground is still reported sliding
 
     def update(
         self,
@@ -151,28 +170,33 @@ class KinematicEstimator:
         e_t: Sequence[float],
         modes: ContactConfiguration,
         in_contact: bool,
+        ground_may_slide: bool = False,
     ) -> KinematicEstimate:
         """Advance with one measured hand pose ``(x_h, y_h, θ_h)`` (world, m/rad).
 
         ``e_n``, ``e_t`` are the hand frame's axes at ``θ_h`` (:func:`ccopt.geometry.hand_normal`,
-        :func:`ccopt.geometry.hand_tangent`), ``modes`` the classified contact configuration,
-        ``in_contact`` whether the hand touches the object.
+        :func:`ccopt.geometry.hand_tangent`), ``modes`` the configuration to work under,
+        ``in_contact`` whether the hand touches the object, ``ground_may_slide`` whether the ground
+        was reported sliding although ``modes`` says it sticks (see the module docstring).
         """
         pose, normal, tangent = hand_pose.tolist(), list(e_n), list(e_t)
         flush = modes.hand_geometry == HandGeometry.FLUSH
         ground_sticks = modes.ground_mode == ContactMode.STICK
         hand_sticks = modes.hand_mode == ContactMode.STICK
+        self._ground_slipping = self._ground_slipping and ground_may_slide
         pivot_ok = True
         if not in_contact:
             self._release(S_H)
         elif ground_sticks and flush:
-            self._regress(pose, normal, tangent, hand_sticks)
+            if ground_may_slide and self._ground_slid(pose, normal, tangent, hand_sticks):
+                self._follow_ground(pose, normal, tangent, hand_sticks)
+            else:
+                self._regress(pose, normal, tangent, hand_sticks)
             self._theta_o, self._theta_o_valid = pose[2], True
         elif ground_sticks:
             pivot_ok = self._pivot(hand_pose, int(modes.hand_geometry))
         elif flush and hand_sticks:
-            self._release(X_O, Y_O)
-            self._measure(pose, normal, tangent)
+            self._follow_ground(pose, normal, tangent, hand_sticks=True)
             self._theta_o, self._theta_o_valid = pose[2], True
         else:
             self.reset()
@@ -199,6 +223,34 @@ class KinematicEstimator:
             self._s_h_released = False
         elif excited:
             self._apply(prediction)
+
+    def _ground_slid(
+        self, pose: list[float], normal: list[float], tangent: list[float], hand_sticks: bool
+    ) -> bool:
+        """Whether the ground slid since it was first reported sliding: latched, or now an innovation
+        beyond ``slip_gate`` of eq. 20, or of eq. 21 if the hand sticks (else the hand explains it)."""
+        if not self._ground_slipping:
+            rows = [((-1.0, normal[0], normal[1], 0.0), normal)]
+            if hand_sticks and not self._s_h_released:
+                rows.append(((0.0, tangent[0], tangent[1], -1.0), tangent))
+            for row, axis in rows:
+                _, innovation, variance = self._predict(row, pose[0] * axis[0] + pose[1] * axis[1])
+                if innovation * innovation > self._slip_gate_squared * variance:
+                    self._ground_slipping = True
+                    self._rejected = 0
+        return self._ground_slipping
+
+    def _follow_ground(
+        self, pose: list[float], normal: list[float], tangent: list[float], hand_sticks: bool
+    ) -> None:
+        """Ground sliding, hand flush: ``r_o`` follows the hand rigidly (hand sticking, the paper's
+        case), or, with the hand sliding too, ``x_o`` and ``s_h`` both change (the object keeps its
+        height on a flat ground) and eqs. 20–21 give both."""
+        if hand_sticks:
+            self._release(X_O, Y_O)
+        else:
+            self._release(X_O, S_H)
+        self._measure(pose, normal, tangent)
 
     def _pivot(self, hand_pose: np.ndarray, sign: int) -> bool:
         """Ground sticking, hand pivoting about its ``sign`` end: ``θ_o`` and ``s_h`` from geometry."""
