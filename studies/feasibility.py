@@ -335,6 +335,11 @@ class FeasibilityChunk:
         return FeasibilityParams(mu_hand=mu_hand, theta_o=theta_o, **shared)
 
 
+def infeasible_steps(obj: PlanarObject, schedule: Schedule, params: LoopParams) -> list[int]:
+    """Indices of the steps of ``schedule`` that :func:`schedule_feasibility` finds impossible on ``obj``."""
+    return [check.index for check in schedule_feasibility(obj, schedule, params) if not check.feasible]
+
+
 def feasibility_trial(chunk: FeasibilityChunk) -> dict:
     """Margins over ``motion × μ_h × θ_o`` (C order), flattened; ``None`` where nothing exists."""
     margins = [

@@ -10,6 +10,8 @@ closed loop (no record folder) and scores it with :func:`ccopt.metrics.summarize
 A trial *succeeds* when it completed (every step reached, both contacts kept) without an unintended
 slip. The causes of a failure (:func:`failure_causes`, several may apply, listed in this order):
 
+``infeasible step``        the schedule has a step no controller can do on this object (the statics LP
+                           of :func:`studies.feasibility.infeasible_steps` on the true object);
 ``loss of contact``        a contact was open in more than 1 % of the samples;
 ``slip at the ground``     the ground contact slid when it had to stick;
 ``slip at the hand``       the hand slid along the object when it had to stick;
@@ -42,7 +44,7 @@ from ccopt.closed_loop import LoopParams
 from ccopt.objects import PlanarObject, make_object
 from ccopt.plant.mujoco_planar import hand_over_vertex
 from ccopt.schedule import load_schedule
-from studies import runner
+from studies import feasibility, runner
 from studies.paper import (
     cell,
     checked_schedule,
@@ -63,6 +65,7 @@ MU_GROUND = (0.4, 0.9)
 INFEASIBLE_SHARE = 0.2
 """A run with more than this share of infeasible control ticks fails (also) by ``infeasible QP``."""
 
+INFEASIBLE_STEP = "infeasible step"
 LOSS_OF_CONTACT = "loss of contact"
 GROUND_SLIP = "slip at the ground"
 HAND_SLIP = "slip at the hand"
@@ -73,6 +76,7 @@ TIMEOUT = "timeout"
 DOES_NOT_FIT = "does not fit the hand"
 RUN_ERROR = "run error"
 CAUSES = (
+    INFEASIBLE_STEP,
     LOSS_OF_CONTACT,
     GROUND_SLIP,
     HAND_SLIP,
@@ -133,11 +137,13 @@ def kinematics_resets(valid: np.ndarray) -> int:
 
 
 def failure_causes(summary: Mapping[str, object]) -> list[str]:
-    """Why a run failed (empty if it succeeded), from its summary and ``kinematics_resets``."""
+    """Why a run failed (empty if it succeeded), from its summary, ``kinematics_resets`` and
+    ``infeasible_steps`` (indices of the physically impossible steps)."""
     if summary["completed"] and summary["unintended_slips"] == 0:
         return []
     slid = {event["contact"] for event in summary["slip_events"]}
     flags = {
+        INFEASIBLE_STEP: bool(summary.get("infeasible_steps")),
         LOSS_OF_CONTACT: not summary["contact_kept"],
         **{cause: contact in slid for contact, cause in _SLIP_CAUSES.items()},
         INFEASIBLE: summary["infeasible_ticks_share"] > INFEASIBLE_SHARE,
@@ -158,11 +164,13 @@ def robustness_trial(spec: RandomObject) -> dict:
     steps = [vars(step) for step in result.steps]
     summary = metrics.summarize(result.samples, steps, len(schedule.steps), result.sim_time, result.wall_time)
     summary["kinematics_resets"] = kinematics_resets(result.samples["est_kinematics_valid"])
+    summary["infeasible_steps"] = feasibility.infeasible_steps(obj, schedule, params)
     causes = failure_causes(summary)
     return {
         "fits_hand": True,
         **flat_summary(summary),
         "kinematics_resets": summary["kinematics_resets"],
+        "infeasible_steps": summary["infeasible_steps"],
         "success": not causes,
         "causes": causes,
         "misses": misses(summary),
@@ -198,6 +206,10 @@ def summarise(specs: Sequence[RandomObject], results: Sequence[dict]) -> dict:
         "successes": sum(bool(r.get("success")) for r in results),
         "success_rate": sum(bool(r.get("success")) for r in results) / len(results),
         "meet_paper_thresholds": sum(r.get("misses") == [] for r in results),
+        "feasible_schedules": sum(r.get("infeasible_steps") == [] for r in results),
+        "successes_on_feasible_schedules": sum(
+            bool(r.get("success")) and r.get("infeasible_steps") == [] for r in results
+        ),
         "errors_over_trials": {key: _quartiles(column(results, key)) for key in ERROR_COLUMNS},
         "causes": dict(Counter(c for found in causes for c in found)),
         "primary_causes": dict(Counter(found[0] for found in causes if found)),
@@ -276,6 +288,10 @@ def overview_rows(summary: Mapping[str, object]) -> list[tuple[str, ...]]:
     rows = [
         ("success (completed, no slips)", f"{summary['successes']}/{summary['trials']}"),
         ("meet the paper thresholds", f"{summary['meet_paper_thresholds']}/{summary['trials']}"),
+        (
+            "success where every step is possible",
+            f"{summary['successes_on_feasible_schedules']}/{summary['feasible_schedules']}",
+        ),
     ]
     for key, q in summary["errors_over_trials"].items():
         rows.append(

@@ -130,6 +130,11 @@ def slip(contact):
             ["slip at the ground", "slip at the hand", "infeasible QP"],
         ),
         ({"infeasible_ticks_share": 0.5, "kinematics_resets": 1}, []),  # succeeded anyway
+        (
+            {"completed": False, "steps_done": 1, "infeasible_steps": [1, 7]},
+            ["infeasible step"],
+        ),
+        ({"infeasible_steps": [3]}, []),  # an impossible step is no failure if the run succeeded
     ],
 )
 def test_failure_causes_from_hand_made_summaries(changes, causes):
