@@ -63,7 +63,7 @@ class AngleFilter:
         if not time >= self._time:  # first sample, or time went back
             return self._start(time, angle)
         dt = time - self._time
-        p00, p01, p11 = self._p
+        p00, p01, p11 = self._p00, self._p01, self._p11
         q = self._acceleration_variance
         p00 += dt * (2.0 * p01 + dt * p11) + q * dt**4 / 4.0
         p01 += dt * p11 + q * dt**3 / 2.0
@@ -77,10 +77,14 @@ class AngleFilter:
         gain_angle, gain_rate = p00 / variance, p01 / variance
         self._angle = predicted + gain_angle * innovation
         self._rate += gain_rate * innovation
-        self._p = [p00 - gain_angle * p00, p01 - gain_angle * p01, p11 - gain_rate * p01]
+        self._p00, self._p01, self._p11 = (
+            p00 - gain_angle * p00,
+            p01 - gain_angle * p01,
+            p11 - gain_rate * p01,
+        )
         return self._angle
 
     def _start(self, time: float, angle: float) -> float:
         self._time, self._angle, self._rate = time, angle, 0.0
-        self._p = [self._noise_variance, 0.0, self.params.rate_std**2]  # P00, P01, P11
+        self._p00, self._p01, self._p11 = self._noise_variance, 0.0, self.params.rate_std**2  # covariance
         return angle

@@ -47,7 +47,8 @@ import numpy as np
 
 from ccopt.estimation.quantile import P2QuantileBank, check_count, check_level, check_number
 
-WORLD_UP = np.array([0.0, 1.0])
+WORLD_UP = (0.0, 1.0)
+"""World up (against gravity), unit: it splits the hull into its two sides and marks its top."""
 _TIME_TOLERANCE = 1e-9
 """Intervals are compared with this slack (s), so that sample times with rounding errors still count."""
 FACE_COSINE_RANGE = (-0.2, math.cos(math.radians(15.0)))
@@ -167,10 +168,9 @@ def fit_ground_cone(
 ) -> GroundCone:
     """The ground rows from support values ``support[k] = h(directions[k])`` (see the module docstring)."""
     if sample_count == 0 or not np.all(np.isfinite(support)):
-        world_up = (float(WORLD_UP[0]), float(WORLD_UP[1]))
-        return _cone(_prior_rows(world_up, params.mu_prior, [(0.0, 0.0)]), False, world_up, (False, False))
+        return _cone(_prior_rows(WORLD_UP, params.mu_prior, [(0.0, 0.0)]), False, WORLD_UP, (False, False))
     active, vertices = half_plane_polygon(directions, support)
-    up = (float(WORLD_UP[0]), float(WORLD_UP[1]))
+    up = WORLD_UP
     rows = _prior_rows(up, params.mu_prior, vertices)
     edges = _edges(directions[active].tolist(), vertices)
     fitted = [False, False]

@@ -19,9 +19,10 @@ ground sticks, hand flush          eq. 20 (and eq. 21 if the hand sticks, so ``s
                                    eq. 21 re-estimates it every sample
 ground slides, hand sticks, flush  ``r_o`` released and both rows used every sample: ``r_o`` moves
                                    rigidly with the hand with the last ``d`` and ``s_h``
-ground *may* slide (reported, but  as if it sticks, until an eq. 20 or eq. 21 innovation exceeds
-not acted on), hand sticks, flush  ``slip_gate`` standard deviations: then rigidly, as if it slides,
-                                   until the ground is reported sticking again
+ground *may* slide (reported, but  as if it sticks, until an innovation exceeds ``slip_gate``
+not acted on), hand flush          standard deviations (eq. 20, and eq. 21 if the hand sticks); then,
+                                   until the ground is reported sticking again, rigidly (hand
+                                   sticking) or with ``x_o`` and ``s_h`` both released (hand sliding)
 ground sticks, hand pivots         no update; ``r_o`` and ``d`` stay, ``θ_o`` and ``s_h`` follow from
                                    the hand end on the object face (:func:`pivot_contact`)
 hand not in contact                no update; ``s_h`` released
@@ -214,8 +215,7 @@ class KinematicEstimator:
         )
         if excited:
             self._measure_normal(pose, normal)
-        row = (0.0, tangent[0], tangent[1], -1.0)
-        value = pose[0] * tangent[0] + pose[1] * tangent[1]
+        row, value = _tangent_row(pose, tangent)
         prediction = self._predict(row, value)
         if not hand_sticks or self._s_h_released or not self._consistent(prediction):
             self._release(S_H)  # reported sliding, unknown, or slid although reported sticking
@@ -230,15 +230,18 @@ class KinematicEstimator:
         """Whether the ground slid since it was first reported sliding: latched, or now an innovation
         beyond ``slip_gate`` of eq. 20, or of eq. 21 if the hand sticks (else the hand explains it)."""
         if not self._ground_slipping:
-            rows = [((-1.0, normal[0], normal[1], 0.0), normal)]
-            if hand_sticks and not self._s_h_released:
-                rows.append(((0.0, tangent[0], tangent[1], -1.0), tangent))
-            for row, axis in rows:
-                _, innovation, variance = self._predict(row, pose[0] * axis[0] + pose[1] * axis[1])
-                if innovation * innovation > self._slip_gate_squared * variance:
-                    self._ground_slipping = True
-                    self._rejected = 0
+            self._ground_slipping = self._beyond_slip_gate(*_normal_row(pose, normal)) or (
+                hand_sticks
+                and not self._s_h_released
+                and self._beyond_slip_gate(*_tangent_row(pose, tangent))
+            )
+            if self._ground_slipping:
+                self._rejected = 0
         return self._ground_slipping
+
+    def _beyond_slip_gate(self, row: tuple[float, float, float, float], value: float) -> bool:
+        _, innovation, variance = self._predict(row, value)
+        return innovation * innovation > self._slip_gate_squared * variance
 
     def _follow_ground(
         self, pose: list[float], normal: list[float], tangent: list[float], hand_sticks: bool
@@ -282,13 +285,12 @@ class KinematicEstimator:
     def _measure(self, pose: list[float], normal: list[float], tangent: list[float]) -> None:
         """Kalman update with eq. 20 (gated, :meth:`_measure_normal`), then eq. 21."""
         self._measure_normal(pose, normal)
-        self._scalar_update((0.0, tangent[0], tangent[1], -1.0), pose[0] * tangent[0] + pose[1] * tangent[1])
+        self._scalar_update(*_tangent_row(pose, tangent))
         self._s_h_released = False
 
     def _measure_normal(self, pose: list[float], normal: list[float]) -> None:
         """Eq. 20 through the innovation gate; ``slip_samples`` rejections in a row reset the estimate."""
-        row, value = (-1.0, normal[0], normal[1], 0.0), pose[0] * normal[0] + pose[1] * normal[1]
-        prediction = self._predict(row, value)
+        prediction = self._predict(*_normal_row(pose, normal))
         if not self._consistent(prediction):
             self._rejected += 1
             if self._rejected >= self.params.slip_samples:
@@ -351,6 +353,16 @@ class KinematicEstimator:
             s_h_valid=s_h_valid,
             contact_valid=contact_valid,
         )
+
+
+def _normal_row(pose: list[float], normal: list[float]) -> tuple[tuple[float, float, float, float], float]:
+    """Eq. 20 as ``row · (d, x_o, y_o, s_h) = value``: ``r_h·e_n = −d + r_o·e_n``."""
+    return (-1.0, normal[0], normal[1], 0.0), pose[0] * normal[0] + pose[1] * normal[1]
+
+
+def _tangent_row(pose: list[float], tangent: list[float]) -> tuple[tuple[float, float, float, float], float]:
+    """Eq. 21 as ``row · (d, x_o, y_o, s_h) = value``: ``r_h·e_t = r_o·e_t − s_h``."""
+    return (0.0, tangent[0], tangent[1], -1.0), pose[0] * tangent[0] + pose[1] * tangent[1]
 
 
 def pivot_contact(
