@@ -16,12 +16,11 @@ import importlib
 import runpy
 import sys
 from collections.abc import Sequence
-from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
 
-from ccopt import metrics, objects, record
+from ccopt import objects, record
 from ccopt.cliutil import OneLineParser, fail, print_table
 from ccopt.objects import PlanarObject
 from ccopt.schedule import load_schedule
@@ -70,7 +69,7 @@ def _run_parser(commands: argparse._SubParsersAction) -> None:
 
 
 def _command_run(args: argparse.Namespace, prog: str) -> int:
-    from ccopt import closed_loop
+    from ccopt import closed_loop, experiment
 
     try:
         obj = build_object(args)
@@ -81,59 +80,20 @@ def _command_run(args: argparse.Namespace, prog: str) -> int:
         folder = record.prepare_folder(args.out)
     except (ValueError, TypeError) as error:
         fail(prog, str(error))
-    meta = {
-        "object": {
-            "name": obj.name,
-            "vertices": obj.vertices.tolist(),
-            "mass": obj.mass,
-            "mu_hand": obj.mu_hand,
-            "mu_ground": obj.mu_ground,
-        },
-        "schedule": schedule.to_dict(),
-        "seed": args.seed,
-        "params": {
-            "plant": args.plant,
-            "estimator_hz": args.estimator_hz,
-            "controller_hz": args.controller_hz,
-            "l_h": params.plant_params.l_h,
-            "start": asdict(params.start),
-        },
-    }
-    infeasible = check_schedule(obj, schedule, params, meta)
-    result = closed_loop_with_progress(closed_loop, obj, schedule, params, args, folder, meta)
+    done = run_with_progress(experiment, obj, schedule, params, args, folder)
+    print_summary(done.summary, folder, interrupted=done.result.interrupted)
     loaded = record.load_record(folder)
-    summary = metrics.summarize(
-        loaded.data, loaded.meta.get("steps", []), len(schedule.steps), result.sim_time, result.wall_time
-    )
-    summary["physically_infeasible_steps"] = infeasible
-    record.write_summary(folder, summary)
-    print_summary(summary, folder, interrupted=result.interrupted)
     if not args.no_figures and loaded.data:
         from ccopt import plots
 
-        paths = plots.write_figures(record.load_record(folder), folder)
+        paths = plots.write_figures(loaded, folder)
         print("figures: " + ", ".join(str(p) for p in paths))
-    return 130 if result.interrupted else 0
+    return 130 if done.result.interrupted else 0
 
 
-def check_schedule(obj: PlanarObject, schedule, params, meta: dict) -> list[int]:
-    """Warn about the steps no controller could do on this object (the experimenter's check).
-
-    Uses the true object through :func:`studies.feasibility.schedule_feasibility`; the result goes to
-    ``meta.json`` (``feasibility``) and the indices of the infeasible steps are returned.
-    """
-    from studies.feasibility import schedule_feasibility
-
-    checks = schedule_feasibility(obj, schedule, params)
-    meta["feasibility"] = [asdict(check) for check in checks]
-    infeasible = [check for check in checks if not check.feasible]
-    for check in infeasible:
-        print(f"warning: not physically possible for this object: {check.describe()}", file=sys.stderr)
-    return [check.index for check in infeasible]
-
-
-def closed_loop_with_progress(closed_loop, obj, schedule, params, args, folder, meta):
-    """Run with a tqdm bar over the schedule's steps (unless ``--no-progress``)."""
+def run_with_progress(experiment, obj, schedule, params, args, folder):
+    """Run the experiment with a tqdm bar over the schedule's steps (unless ``--no-progress``); the
+    oracle's warnings about impossible steps go to stderr first."""
     from tqdm import tqdm
 
     bar = tqdm(total=len(schedule.steps), unit="step", disable=args.no_progress, leave=False, mininterval=0.5)
@@ -143,7 +103,12 @@ def closed_loop_with_progress(closed_loop, obj, schedule, params, args, folder, 
             bar.set_postfix(sim=f"{sim_time:.1f}s", refresh=False)
             bar.update(min(index, total) - bar.n)  # redraws at most every mininterval
 
-        return closed_loop.run(obj, schedule, params, seed=args.seed, out=folder, meta=meta, on_tick=on_tick)
+        def warn(line: str) -> None:
+            print(f"warning: {line}", file=sys.stderr)
+
+        return experiment.run_experiment(
+            obj, schedule, params, seed=args.seed, folder=folder, on_tick=on_tick, warn=warn
+        )
 
 
 def print_summary(summary: dict, folder: Path, interrupted: bool) -> None:
@@ -166,7 +131,7 @@ def print_summary(summary: dict, folder: Path, interrupted: bool) -> None:
             f"[{stat('ratio_realised_commanded', 'q25')}, {stat('ratio_realised_commanded', 'q75')}]",
         ),
         ("unintended slips", str(summary["unintended_slips"])),
-        ("physically infeasible steps", str(summary.get("physically_infeasible_steps", "not checked"))),
+        ("physically impossible steps (oracle)", str(summary.get("impossible_steps", "not checked"))),
         ("sim / wall time (s)", f"{summary['sim_time_s']:.1f} / {summary['wall_time_s']:.1f}"),
     ]
     if interrupted:

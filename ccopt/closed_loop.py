@@ -19,21 +19,24 @@ import time as wallclock
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
 from ccopt import geometry
 from ccopt.control.controller import Command, ControlInput, Controller, ControllerParams
 from ccopt.estimation.estimator import Estimate, Estimator, EstimatorParams
-from ccopt.estimation.friction import HandFrictionParams
-from ccopt.estimation.kinematics import KinematicsParams
+from ccopt.hand import Hand
+from ccopt.modes import MOTION_CODES
 from ccopt.objects import PlanarObject
 from ccopt.plant.base import Plant, PlantParams, StartConfig
-from ccopt.plant.mujoco_planar import hand_over_vertex
+from ccopt.plant.placement import hand_over_vertex
 from ccopt.plant.sensors import SensorParams, Sensors
 from ccopt.record import RecordWriter
-from ccopt.schedule import MOTION_CODES, Schedule, Step
+from ccopt.schedule import Schedule, Step
+
+if TYPE_CHECKING:
+    from ccopt.plant.mujoco_panda import PandaParams
 
 PlantKind = Literal["planar", "panda"]
 
@@ -47,44 +50,65 @@ class Perturbation:
     duration: float
 
 
-HAND_HALF_LENGTH = 0.03
-"""Default ``l_h`` of closed-loop runs, m: a 6 cm hand. The paper assumes the object's face always
-contains the hand, and its hexagon's and pentagon's faces are 7 and 8 cm (DESIGN.md's 10 cm plant
-default fits only the triangle and the rectangle). Note that with the ground contact sticking, a
-flush hand can slide only where ``|d μ_h + s_h| ≤ l_h`` (moment balance about the ground contact:
-``τ_h = d f_t − s_h f_n − M_grav``); for the paper's objects (``d`` ≈ 10–12 cm, ``μ_h`` = 0.5) that
-holds for neither hand length when the hand is over the ground contact."""
-
-
 @dataclass(frozen=True)
 class LoopParams:
     """Rates and components of a closed-loop run.
 
-    ``start`` gives the object's tilt (resting on one vertex, as in the paper) and the push; with
-    ``centre_hand`` the hand starts as close over the ground contact as its length allows
-    (:func:`~ccopt.plant.mujoco_planar.hand_over_vertex`), whatever ``start.s_h`` says. The estimator
-    is told the hand's length (the robot knows its own hand), nothing about the object.
+    ``hand`` is the robot's hand, handed to the plant, the estimator (which is told nothing about the
+    object) and the controller. ``start`` gives the object's tilt (resting on one vertex, as in the
+    paper) and the push; with ``centre_hand`` the hand starts as close over the ground contact as its
+    length allows (:func:`~ccopt.plant.placement.hand_over_vertex`), whatever ``start.s_h`` says.
+    ``panda`` holds the Panda plant's own settings (None: its defaults). Rates in Hz.
     """
 
     plant: PlantKind = "planar"
     estimator_hz: float = 100.0
     controller_hz: float = 30.0
+    hand: Hand = field(default_factory=Hand)
     start: StartConfig = field(default_factory=lambda: StartConfig(theta_o=0.3, normal_force=10.0))
     centre_hand: bool = True
-    plant_params: PlantParams = field(default_factory=lambda: PlantParams(l_h=HAND_HALF_LENGTH))
+    plant_params: PlantParams = field(default_factory=PlantParams)
+    panda: PandaParams | None = None
     sensor_params: SensorParams = field(default_factory=SensorParams)
     controller_params: ControllerParams = field(default_factory=ControllerParams)
-    estimator_params: EstimatorParams | None = None
+    estimator_params: EstimatorParams = field(default_factory=EstimatorParams)
     perturbations: tuple[Perturbation, ...] = ()
 
     def __post_init__(self) -> None:
         if self.plant not in ("planar", "panda"):
             raise ValueError(f"unknown plant {self.plant!r}; expected 'planar' or 'panda'")
+        parts = (
+            ("hand", Hand),
+            ("start", StartConfig),
+            ("plant_params", PlantParams),
+            ("sensor_params", SensorParams),
+            ("controller_params", ControllerParams),
+            ("estimator_params", EstimatorParams),
+        )
+        for name, kind in parts:
+            if not isinstance(getattr(self, name), kind):
+                value = getattr(self, name)
+                raise TypeError(f"{name} must be a {kind.__name__}, got {type(value).__name__} {value!r}")
         top = 1.0 / self.plant_params.timestep
         for name in ("estimator_hz", "controller_hz"):
             rate = getattr(self, name)
             if not (np.isfinite(rate) and 0.0 < rate <= top):
                 raise ValueError(f"{name} must be in (0, {top:g}] Hz, got {rate!r}")
+        f_min, f_max = self.hand.force_limits
+        if not f_min < self.controller_params.normal_force < f_max:
+            raise ValueError(
+                f"controller normal_force {self.controller_params.normal_force} N must lie inside the "
+                f"hand's force limits {self.hand.force_limits}"
+            )
+
+    def ticks(self, rate: float) -> int:
+        """Plant steps per period of a loop running at ``rate`` Hz (at least 1)."""
+        return max(1, round(1.0 / (rate * self.plant_params.timestep)))
+
+    @property
+    def control_period(self) -> float:
+        """The controller's actual period, s (a whole number of plant steps)."""
+        return self.ticks(self.controller_hz) * self.plant_params.timestep
 
 
 @dataclass(frozen=True)
@@ -111,30 +135,23 @@ class RunResult:
     folder: Path | None
 
 
-def make_plant(kind: PlantKind, obj: PlanarObject, params: PlantParams, start: StartConfig) -> Plant:
-    """The planar or the Panda plant (the Panda module is imported only when asked for)."""
-    if kind == "planar":
+def make_plant(obj: PlanarObject, params: LoopParams) -> Plant:
+    """The plant of a run: planar or Panda (whose module is imported only when asked for)."""
+    start = start_config(obj, params)
+    if params.plant == "planar":
         from ccopt.plant.mujoco_planar import PlanarPlant
 
-        return PlanarPlant(obj, params, start)
+        return PlanarPlant(obj, params.plant_params, start, params.hand)
     from ccopt.plant.mujoco_panda import PandaPlant
 
-    return PandaPlant(obj, params, start)
+    return PandaPlant(obj, params.plant_params, start, params.hand, panda=params.panda)
 
 
 def start_config(obj: PlanarObject, params: LoopParams) -> StartConfig:
     """The configuration a run of ``params`` on ``obj`` starts in (``centre_hand`` applied)."""
     if params.centre_hand:
-        return hand_over_vertex(obj, params.start, params.plant_params.l_h)
+        return hand_over_vertex(obj, params.start, params.hand)
     return params.start
-
-
-def estimator_params(half_length: float) -> EstimatorParams:
-    """Default estimator parameters for a hand of half-length ``half_length`` (m)."""
-    return EstimatorParams(
-        friction=HandFrictionParams(half_length=half_length),
-        kinematics=KinematicsParams(half_length=half_length),
-    )
 
 
 def control_input(estimate: Estimate, hand_pose: np.ndarray, coordinates: np.ndarray) -> ControlInput:
@@ -144,6 +161,7 @@ def control_input(estimate: Estimate, hand_pose: np.ndarray, coordinates: np.nda
         cone_rows=estimate.cone_rows,
         cone_bounds=estimate.cone_bounds,
         row_valid=estimate.row_valid,
+        mu_h=estimate.mu_h,
         l_h=estimate.torque_lever,
         hand_angle=float(hand_pose[2]),
         s_h=estimate.s_h,
@@ -237,16 +255,16 @@ def run(
     Ctrl-C ends the run early: the record is closed with status ``interrupted`` and the result says so.
     """
     params = params or LoopParams()
-    plant = make_plant(params.plant, obj, params.plant_params, start_config(obj, params))
+    plant = make_plant(obj, params)
     sensors = Sensors(plant, params.sensor_params, seed)
-    estimator = Estimator(params.estimator_params or estimator_params(params.plant_params.l_h))
-    controller = Controller(params.controller_params)
+    estimator = Estimator(params.hand, params.estimator_params)
+    controller = Controller(params.hand, params.control_period, params.controller_params)
     writer = RecordWriter(out, meta or {}) if out is not None else None
     samples: dict[str, list[np.ndarray]] = {}
     tracker = _StepTracker(schedule)
     dt = plant.timestep
-    estimator_every = max(1, round(1.0 / (params.estimator_hz * dt)))
-    controller_every = max(1, round(1.0 / (params.controller_hz * dt)))
+    estimator_every = params.ticks(params.estimator_hz)
+    controller_every = params.ticks(params.controller_hz)
     target = np.array(plant.target(), dtype=float)
     velocity = np.zeros(3)
     pending = list(params.perturbations)
@@ -281,8 +299,7 @@ def run(
                 coordinates = tracker.coordinates(estimate, hand_pose)
                 output = controller.update(control_input(estimate, hand_pose, coordinates), tracker.command)
                 last_slack, last_feasible = output.solution.slack, output.solution.feasible
-                period = controller_every * dt
-                velocity = geometry.twist_hand_to_world(hand_pose[2], output.step) / period
+                velocity = geometry.twist_hand_to_world(hand_pose[2], output.step) / controller.period
                 if on_tick is not None:
                     on_tick(plant.time, tracker.index, len(schedule.steps))
     except KeyboardInterrupt:

@@ -36,6 +36,9 @@ from numpy.typing import ArrayLike, NDArray
 GRAVITY = 9.81
 """Magnitude of gravity, m/s², acting along ``-y``."""
 
+WORLD_UP = (0.0, 1.0)
+"""The world's up ``+y`` (against gravity), as the robot knows it from gravity."""
+
 Array = NDArray[np.float64]
 
 
@@ -101,6 +104,11 @@ def wrench_world_to_hand(theta_h: float, wrench_world: ArrayLike) -> Array:
     return np.array([s * f_x - c * f_y, c * f_x + s * f_y, torque])
 
 
+def hand_force_to_world(theta_h: float, f_n: float, f_t: float) -> Array:
+    """Hand-frame force ``(f_n, f_t)`` (N) to the world force ``f_n e_n + f_t e_t`` (N)."""
+    return f_n * hand_normal(theta_h) + f_t * hand_tangent(theta_h)
+
+
 def twist_hand_to_world(theta_h: float, twist_hand: ArrayLike) -> Array:
     """Hand-frame increment ``(Δn, Δt, Δθ)`` of the hand pose to the world increment ``(Δx, Δy, Δθ)``."""
     return planar_hand_to_world(theta_h) @ np.asarray(twist_hand, dtype=float)
@@ -132,10 +140,35 @@ def hand_pose_from_contact(theta_o: float, s_h: float, d: float, r_o: ArrayLike)
 
 
 def contact_coordinates(hand_pose: ArrayLike, r_o: ArrayLike) -> tuple[float, float]:
-    """``(s_h, d)`` of the ground contact ``r_o`` seen from the hand pose (paper eqs. 19, 21), m."""
+    """``(s_h, d)`` of the ground contact ``r_o`` seen from the hand pose (paper eqs. 14, 16), m."""
     x_h, y_h, theta_h = np.asarray(hand_pose, dtype=float)
     rel = np.asarray(r_o, dtype=float) - np.array([x_h, y_h])
     return float(rel @ hand_tangent(theta_h)), float(rel @ hand_normal(theta_h))
+
+
+def ground_contact(hand_pose: ArrayLike, s_h: ArrayLike, d: ArrayLike) -> Array:
+    """The ground contact ``r_o = r_h + s_h e_t + d e_n`` (m) of a flush hand (paper eq. 14 solved
+    for ``r_o``); ``hand_pose`` ``(3,)`` or ``(N, 3)`` with ``s_h``, ``d`` scalars or ``(N,)``."""
+    pose = np.asarray(hand_pose, dtype=float)
+    theta = pose[..., 2]
+    s_h, d = np.asarray(s_h, dtype=float)[..., None], np.asarray(d, dtype=float)[..., None]
+    e_t, e_n = np.moveaxis(hand_tangent(theta), 0, -1), np.moveaxis(hand_normal(theta), 0, -1)
+    return pose[..., :2] + s_h * e_t + d * e_n
+
+
+def face_angle(outward_normal: ArrayLike, object_angle: float) -> float:
+    """World orientation ``θ`` (rad) of an object face whose outward normal is ``outward_normal`` in the
+    object's body frame, for the object at ``object_angle``: the face's outward normal is ``−e_n(θ)``,
+    so that a hand at ``θ_h = θ`` lies flush on it."""
+    normal = np.asarray(outward_normal, dtype=float)
+    return object_angle + math.atan2(normal[1], normal[0]) - 0.5 * math.pi
+
+
+def object_angle_for_face(outward_normal: ArrayLike, theta_o: float) -> float:
+    """The object angle (rad) that turns a face with body-frame ``outward_normal`` to ``θ_o``
+    (the inverse of :func:`face_angle`)."""
+    normal = np.asarray(outward_normal, dtype=float)
+    return theta_o + 0.5 * math.pi - math.atan2(normal[1], normal[0])
 
 
 # --- polygons -----------------------------------------------------------------------------------
@@ -201,6 +234,19 @@ def face_normal(vertices: ArrayLike, face: int) -> Array:
     poly = as_polygon(vertices)
     edge = poly[(face + 1) % len(poly)] - poly[face % len(poly)]
     return np.array([edge[1], -edge[0]]) / np.linalg.norm(edge)
+
+
+LOWEST_TIE = 1e-4
+"""Vertices within this height (m) of the lowest one tie for the ground contact."""
+
+
+def lowest_vertex(world_vertices: ArrayLike) -> int:
+    """Index of the ground-contact vertex of a polygon in world coordinates: the lowest, ties
+    (:data:`LOWEST_TIE`) to the left-most."""
+    vertices = np.asarray(world_vertices, dtype=float)
+    heights = vertices[:, 1]
+    candidates = np.flatnonzero(heights <= heights.min() + LOWEST_TIE)
+    return int(candidates[np.argmin(vertices[candidates, 0])])
 
 
 def transform_points(points: ArrayLike, pose: ArrayLike) -> Array:

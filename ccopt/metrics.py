@@ -11,15 +11,21 @@ All functions take the run's time series (the arrays of ``record.npz``, see
   or a hand required flush that truly turned against the object by more than :data:`SLIP_ANGLE`;
 * mode-classification confusion per contact, in particular how often true sliding was reported as
   sticking (the error the estimator must avoid) and the opposite error;
-* success: every step reached and both contacts kept throughout.
+* success: every step reached and both contacts kept throughout;
+* the verdicts the studies give a run: the closed-loop thresholds (:class:`Thresholds`,
+  :func:`misses`), the causes of a failure (:func:`failure_causes`), the kinematics lost
+  (:func:`kinematics_resets`), and for a pushed run the recovery of a coordinate
+  (:func:`recovery_time`, :func:`coordinate_changes`, :func:`slip_distance`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
+from ccopt import modes
 from ccopt.geometry import wrap_angle
 
 SLIP_DISTANCE = 1e-3
@@ -33,13 +39,6 @@ hand losing its line contact."""
 CONTACT_SHARE = 0.99
 """Share of the samples in which both contacts must exist for a run to count as completed."""
 
-# which true modes (hand slide, hand geometry, ground slide) must stay 0 for each kind of step
-_MUST_STICK = {
-    "hold": (True, True, True),
-    "pivot": (True, True, True),
-    "slide_hand": (False, True, True),
-    "slide_ground": (True, True, False),
-}
 CONTACT_NAMES = ("hand_slide", "hand_pivot", "ground_slide")
 
 
@@ -67,12 +66,11 @@ def _at(data: Mapping[str, np.ndarray], moment: float) -> int:
 
 def realised_ratios(data: Mapping[str, np.ndarray], steps: Sequence[Mapping[str, object]]) -> np.ndarray:
     """True change of the commanded coordinate over each (non-hold) step, over the commanded change."""
-    coordinate = {"pivot": 0, "slide_hand": 1, "slide_ground": 2}
     ratios = []
     for step in steps:
-        if step["kind"] == "hold":
+        k = modes.driven_coordinate(step["kind"])
+        if k is None:
             continue
-        k = coordinate[step["kind"]]
         start, end = _at(data, step["start_time"]), _at(data, step["end_time"])
         change = data["true_coordinates"][end, k] - data["true_coordinates"][start, k]
         if k == 0:
@@ -98,7 +96,7 @@ def unintended_slips(
         start, end = _at(data, step["start_time"]), _at(data, step["end_time"])
         if end <= start:
             continue
-        hand_stick, hand_flush, ground_stick = _MUST_STICK[step["kind"]]
+        hand_stick, hand_flush, ground_stick = modes.kept_contacts(step["kind"])
         segment = relative_angle[start : end + 1]
         measures = (
             ("hand_slide", hand_stick, slid[end, 0] - slid[start, 0], SLIP_DISTANCE),
@@ -161,3 +159,143 @@ def summarize(
         "sim_time_s": float(sim_time),
         "wall_time_s": float(wall_time),
     }
+
+
+# --- verdicts -------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Thresholds:
+    """What a closed-loop run must achieve: error medians in deg and mm, the ratio band, no slips."""
+
+    theta_err_deg: float = 1.0
+    s_h_err_mm: float = 3.0
+    s_g_err_mm: float = 3.0
+    ratio_low: float = 0.85
+    ratio_high: float = 1.15
+
+
+def _at_most(value: float | None, limit: float) -> bool:
+    return value is not None and value <= limit
+
+
+def misses(summary: Mapping[str, object], thresholds: Thresholds = Thresholds()) -> list[str]:
+    """The thresholds a run misses: ``completed``, ``theta_err``, ``s_h_err``, ``s_g_err``, ``ratio``,
+    ``slips`` (an absent median misses)."""
+    ratio = summary["ratio_realised_commanded"]["median"]
+    checks = {
+        "completed": bool(summary["completed"]),
+        "theta_err": _at_most(summary["theta_err_deg"]["median"], thresholds.theta_err_deg),
+        "s_h_err": _at_most(summary["s_h_err_mm"]["median"], thresholds.s_h_err_mm),
+        "s_g_err": _at_most(summary["s_g_err_mm"]["median"], thresholds.s_g_err_mm),
+        "ratio": ratio is not None and thresholds.ratio_low <= ratio <= thresholds.ratio_high,
+        "slips": summary["unintended_slips"] == 0,
+    }
+    return [name for name, met in checks.items() if not met]
+
+
+def flat_summary(summary: Mapping[str, object]) -> dict[str, object]:
+    """The scalar columns of a :func:`summarize` summary (errors in deg and mm), for tables and CSV."""
+    slips = [event["contact"] for event in summary["slip_events"]]
+    ratio = summary["ratio_realised_commanded"]
+    return {
+        "completed": summary["completed"],
+        "steps_done": summary["steps_done"],
+        "steps_total": summary["steps_total"],
+        "contact_kept": summary["contact_kept"],
+        **{
+            f"{key}_{stat}": summary[key][stat]
+            for key in ("theta_err_deg", "s_h_err_mm", "s_g_err_mm")
+            for stat in ("median", "p95")
+        },
+        "ratio_median": ratio["median"],
+        "ratio_q25": ratio["q25"],
+        "ratio_q75": ratio["q75"],
+        "unintended_slips": summary["unintended_slips"],
+        **{f"slips_{name}": slips.count(name) for name in CONTACT_NAMES},
+        "infeasible_share": summary["infeasible_ticks_share"],
+        "sim_time_s": summary["sim_time_s"],
+        "wall_time_s": summary["wall_time_s"],
+    }
+
+
+def kinematics_resets(valid: np.ndarray) -> int:
+    """How often the estimated kinematics went from valid to invalid."""
+    flags = np.asarray(valid, dtype=bool)
+    return int(np.sum(flags[:-1] & ~flags[1:]))
+
+
+INFEASIBLE_SHARE = 0.2
+"""A run with more than this share of infeasible control ticks fails (also) by ``infeasible QP``."""
+
+IMPOSSIBLE_STEP = "impossible step"
+LOSS_OF_CONTACT = "loss of contact"
+GROUND_SLIP = "slip at the ground"
+HAND_SLIP = "slip at the hand"
+HAND_PIVOT = "hand pivot"
+INFEASIBLE = "infeasible QP"
+ESTIMATOR_RESET = "estimator reset"
+TIMEOUT = "timeout"
+CAUSES = (
+    IMPOSSIBLE_STEP,
+    LOSS_OF_CONTACT,
+    GROUND_SLIP,
+    HAND_SLIP,
+    HAND_PIVOT,
+    INFEASIBLE,
+    ESTIMATOR_RESET,
+    TIMEOUT,
+)
+"""Why a run can fail, in the order :func:`failure_causes` lists them."""
+_SLIP_CAUSES = {"ground_slide": GROUND_SLIP, "hand_slide": HAND_SLIP, "hand_pivot": HAND_PIVOT}
+
+
+def failure_causes(summary: Mapping[str, object]) -> list[str]:
+    """Why a run failed (empty if it completed without an unintended slip), from its summary
+    (including ``impossible_steps`` and ``kinematics_resets``, see :mod:`ccopt.experiment`):
+
+    ``impossible step``  the schedule has a step no controller can do on this object (the oracle);
+    ``loss of contact``  a contact was open in more than 1 % of the samples;
+    ``slip at the ground`` / ``slip at the hand`` / ``hand pivot``  a contact that had to keep its
+                         mode did not;
+    ``infeasible QP``    more than :data:`INFEASIBLE_SHARE` of the control ticks had no feasible step;
+    ``estimator reset``  the estimated kinematics became invalid after having been valid;
+    ``timeout``          a step was not reached and none of the above applies.
+    """
+    if summary["completed"] and summary["unintended_slips"] == 0:
+        return []
+    slid = {event["contact"] for event in summary["slip_events"]}
+    flags = {
+        IMPOSSIBLE_STEP: bool(summary.get("impossible_steps")),
+        LOSS_OF_CONTACT: not summary["contact_kept"],
+        **{cause: contact in slid for contact, cause in _SLIP_CAUSES.items()},
+        INFEASIBLE: summary["infeasible_ticks_share"] > INFEASIBLE_SHARE,
+        ESTIMATOR_RESET: summary.get("kinematics_resets", 0) > 0,
+    }
+    causes = [cause for cause in CAUSES if flags.get(cause)]
+    return causes or [TIMEOUT]
+
+
+def recovery_time(time: np.ndarray, error: np.ndarray, tolerance: float) -> float | None:
+    """First time ≥ 0 (s) after which ``|error| ≤ tolerance`` to the end; 0 if it never left, None if
+    it is outside (or unknown, NaN) at the last sample. ``time`` counts from a push's start."""
+    after = np.asarray(time) >= 0.0
+    times, errors = np.asarray(time)[after], np.abs(np.asarray(error)[after])
+    outside = np.flatnonzero(~(errors <= tolerance))
+    if outside.size == 0:
+        return 0.0
+    if outside[-1] == len(times) - 1:
+        return None
+    return float(times[outside[-1] + 1])
+
+
+def coordinate_changes(values: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """``values − reference`` per coordinate ``(θ_o, s_h, s_g)`` (rows of ``values``), the angle wrapped."""
+    delta = np.asarray(values) - reference
+    delta[:, 0] = wrap_angle(delta[:, 0])
+    return delta
+
+
+def slip_distance(time: np.ndarray, rates: np.ndarray) -> np.ndarray:
+    """Distance each contact truly slid (m): ``∫ |slip speed| dt`` per column of ``rates`` (m/s)."""
+    return np.sum(np.abs(rates) * np.diff(time, prepend=time[0])[:, None], axis=0)

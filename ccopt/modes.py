@@ -1,4 +1,15 @@
-"""Contact modes, hand geometry, contact configurations and commanded motions (paper §III, §V).
+"""The motion vocabulary of ccopt: contact modes, hand geometry, configurations and commanded motions.
+
+The one place that says, for every commanded motion (paper §III, Fig. 2, and §V):
+
+* which contact configuration it asks for (:func:`configuration`) and so which contacts must keep
+  their mode (:func:`kept_contacts`);
+* which cone rows it removes from the controller's QP (:data:`REMOVED_ROWS`, :func:`kept_rows`);
+* which coordinate of ``(θ_o, s_h, s_g)`` it drives (:func:`driven_coordinate`) and which it admits
+  (:func:`admitted_coordinates`);
+* its *kind* as schedules and records name it (``hold``, ``pivot``, ``slide_hand``,
+  ``slide_ground``: :data:`KINDS`, :func:`kind_of`, :func:`motion_of`) and its integer code in a run
+  record (:data:`MOTION_CODES`).
 
 Signs follow :mod:`ccopt.geometry` and the :class:`ccopt.contact.Row` table: a hand mode's sign is
 the sign of ``ṡ_h``, the hand geometry's the sign of ``Δθ = θ_o − θ_h`` and the ground mode's the
@@ -9,8 +20,9 @@ contact keeps its mode.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import astuple, dataclass
 from enum import Enum, IntEnum
+from typing import Literal
 
 import numpy as np
 
@@ -73,6 +85,78 @@ _CONFIGURATIONS: dict[Motion, ContactConfiguration] = {
     Motion.SLIDE_GROUND_POS: ContactConfiguration(ground_mode=ContactMode.SLIDE_POS),
     Motion.SLIDE_GROUND_NEG: ContactConfiguration(ground_mode=ContactMode.SLIDE_NEG),
 }
+
+
+Kind = Literal["hold", "pivot", "slide_hand", "slide_ground"]
+KINDS: tuple[Kind, ...] = ("hold", "pivot", "slide_hand", "slide_ground")
+"""The kinds of schedule step; a kind's index is its code in a run record (:data:`MOTION_CODES`)."""
+MOTION_CODES: dict[str, int] = {kind: code for code, kind in enumerate(KINDS)}
+"""Integer code of each kind in a run record (``motion``): hold 0, pivot 1, slide_hand 2, slide_ground 3."""
+
+COORDINATES = ("theta_o", "s_h", "s_g")
+"""The coordinates a motion changes, in the order of every ``(θ_o, s_h, s_g)`` vector (rad, m, m)."""
+THETA_O, S_H, S_G = range(3)
+"""Indices into :data:`COORDINATES`."""
+
+_KIND: dict[Motion, Kind] = {
+    Motion.HOLD: "hold",
+    Motion.PIVOT: "pivot",
+    Motion.SLIDE_HAND_POS: "slide_hand",
+    Motion.SLIDE_HAND_NEG: "slide_hand",
+    Motion.SLIDE_GROUND_POS: "slide_ground",
+    Motion.SLIDE_GROUND_NEG: "slide_ground",
+}
+_DRIVES: dict[str, int | None] = {"hold": None, "pivot": THETA_O, "slide_hand": S_H, "slide_ground": S_G}
+_ADMITS: dict[str, tuple[int, ...]] = {
+    "hold": (THETA_O,),
+    "pivot": (THETA_O,),
+    "slide_hand": (THETA_O, S_H),
+    "slide_ground": (THETA_O, S_G),
+}
+"""Coordinates that can change under each kind: a sticking contact fixes its coordinate, and with both
+contacts sticking and the hand flush the object can still turn about the ground contact."""
+
+
+def kind_of(motion: Motion | str) -> Kind:
+    """The kind (``hold``, ``pivot``, ``slide_hand``, ``slide_ground``) of a motion or of a kind."""
+    if isinstance(motion, str) and motion in _DRIVES:
+        return motion
+    return _KIND[_as_motion(motion)]
+
+
+def motion_of(kind: str, delta: float = 0.0) -> Motion:
+    """The motion of a step of ``kind`` with increment ``delta`` (rad or m; its sign picks a slide's way)."""
+    if kind == "slide_hand":
+        return slide_hand(delta)
+    if kind == "slide_ground":
+        return slide_ground(delta)
+    if kind in ("hold", "pivot"):
+        return Motion(kind)
+    raise ValueError(f"unknown step kind {kind!r}; expected one of: {', '.join(KINDS)}")
+
+
+def driven_coordinate(motion: Motion | str) -> int | None:
+    """Index into ``(θ_o, s_h, s_g)`` of the coordinate a motion (or kind) drives; None for a hold."""
+    return _DRIVES[kind_of(motion)]
+
+
+def driving_kind(coordinate: int | str) -> Kind:
+    """The kind of step that drives a coordinate, given by index or by name (:data:`COORDINATES`)."""
+    index = COORDINATES.index(coordinate) if isinstance(coordinate, str) else coordinate
+    return next(kind for kind, driven in _DRIVES.items() if driven == index)
+
+
+def admitted_coordinates(motion: Motion | str) -> tuple[int, ...]:
+    """Indices into ``(θ_o, s_h, s_g)`` of the coordinates that can change under a motion (or kind)."""
+    return _ADMITS[kind_of(motion)]
+
+
+def kept_contacts(motion: Motion | str) -> tuple[bool, bool, bool]:
+    """Whether the hand must stick, the hand must stay flush and the ground must stick under a motion
+    (or kind): every contact the motion's configuration does not set moving keeps its mode."""
+    kind = kind_of(motion)
+    representative = motion_of(kind, 1.0)
+    return tuple(value == 0 for value in astuple(_CONFIGURATIONS[representative]))
 
 
 def configuration(motion: Motion) -> ContactConfiguration:

@@ -7,7 +7,7 @@ A panel whose data are missing (an empty or interrupted record, no valid kinemat
 says "no data" instead of raising.
 
 The coordinates are ``(θ_o, s_h, s_g)`` in that order, and a sample's ``motion`` code
-(``ccopt.schedule.MOTION_CODES``: 0 hold, 1 pivot, 2 slide_hand, 3 slide_ground) commands
+(``ccopt.modes.MOTION_CODES``: 0 hold, 1 pivot, 2 slide_hand, 3 slide_ground) commands
 coordinate ``motion − 1``.
 """
 
@@ -26,9 +26,9 @@ from matplotlib.patches import Polygon
 from matplotlib.ticker import MaxNLocator
 
 from ccopt import geometry, metrics
+from ccopt.hand import Hand
 from ccopt.objects import PlanarObject
-from ccopt.plant.base import PlantParams, StartConfig
-from ccopt.plant.truth import face_angle, lowest_vertex
+from ccopt.plant.base import StartConfig
 from ccopt.record import Record
 
 ESTIMATE_COLOR = "tab:blue"
@@ -386,25 +386,16 @@ def _object(record: Record) -> tuple[np.ndarray, float] | None:
     start = record.meta.get("params", {}).get("start", {})
     try:
         obj = PlanarObject(spec["name"], spec["vertices"], spec["mass"], spec["mu_hand"], spec["mu_ground"])
-        return obj.vertices, -face_angle(obj, start.get("hand_face", StartConfig().hand_face), 0.0)
+        face = start.get("hand_face", StartConfig().hand_face)
+        return obj.vertices, -geometry.face_angle(obj.face_normal(face), 0.0)
     except (KeyError, TypeError, ValueError):
         return None
-
-
-def _ground_contact(pose: np.ndarray, s_h: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """``r_o = r_h + s_h e_t + d e_n`` of each sample (m), hand poses ``(N, 3)``."""
-    theta = pose[:, 2]
-    return (
-        pose[:, :2]
-        + s_h[:, None] * geometry.hand_tangent(theta).T
-        + d[:, None] * geometry.hand_normal(theta).T
-    )
 
 
 def _polygon(vertices: np.ndarray, offset: float, theta_o: float, r_o: np.ndarray) -> np.ndarray:
     """World vertices of the object at angle ``θ_o + offset`` whose lowest vertex is at ``r_o`` (m)."""
     turned = geometry.transform_points(vertices, (0.0, 0.0, theta_o + offset))
-    return turned - turned[lowest_vertex(turned)] + r_o
+    return turned - turned[geometry.lowest_vertex(turned)] + r_o
 
 
 def _upward(row: np.ndarray) -> np.ndarray:
@@ -433,16 +424,24 @@ SCENE_KEYS = (
 """Series the animation needs."""
 
 
+def _half_length(record: Record) -> float:
+    """The hand's ``l_h`` (m) of a run's ``meta.json`` (the default hand's if the run did not say)."""
+    params = record.meta.get("params", {})
+    hand = params.get("hand", {}) if isinstance(params, dict) else {}
+    value = hand.get("half_length") if isinstance(hand, dict) else None
+    return float(value) if isinstance(value, int | float) else Hand().half_length
+
+
 def _scene(record: Record, frames: np.ndarray) -> list[dict[str, np.ndarray | None]]:
     """Per frame, in m: the object polygon (true), hand segment (true), true and estimated ``r_o``,
     the estimated hand cone at the measured hand and the estimated ground cone at the estimated ``r_o``
     (None where unknown).
     """
     data = record.data
-    l_h = float(record.meta.get("params", {}).get("l_h", PlantParams().l_h))
+    l_h = _half_length(record)
     true_pose, pose = data["true_hand_pose"][frames], data["hand_pose"][frames]
-    r_o = _ground_contact(true_pose, data["true_coordinates"][frames, 1], data["true_d"][frames])
-    r_est = _ground_contact(pose, data["est_coordinates"][frames, 1], data["est_d"][frames])
+    r_o = geometry.ground_contact(true_pose, data["true_coordinates"][frames, 1], data["true_d"][frames])
+    r_est = geometry.ground_contact(pose, data["est_coordinates"][frames, 1], data["est_d"][frames])
     valid = _valid(record)[frames]
     known = _object(record)
     scene = []

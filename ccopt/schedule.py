@@ -21,20 +21,12 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal
 
 import numpy as np
 import yaml
 
 from ccopt import modes
-from ccopt.modes import Motion
-
-Kind = Literal["pivot", "slide_hand", "slide_ground", "hold"]
-KINDS: tuple[Kind, ...] = ("pivot", "slide_hand", "slide_ground", "hold")
-COORDINATE = {"pivot": 0, "slide_hand": 1, "slide_ground": 2}
-"""Index of the coordinate ``(θ_o, s_h, s_g)`` each kind of step changes."""
-MOTION_CODES = {"hold": 0, "pivot": 1, "slide_hand": 2, "slide_ground": 3}
-"""Integer code of each kind of step in a run record; ``code − 1`` is its :data:`COORDINATE`."""
+from ccopt.modes import KINDS, Kind, Motion
 
 PIVOT_STEP = np.deg2rad(7.2)
 SLIDE_STEP = 0.010
@@ -75,18 +67,12 @@ class Step:
     @property
     def motion(self) -> Motion:
         """The commanded motion of :mod:`ccopt.modes`."""
-        if self.kind == "pivot":
-            return Motion.PIVOT
-        if self.kind == "slide_hand":
-            return modes.slide_hand(self.delta)
-        if self.kind == "slide_ground":
-            return modes.slide_ground(self.delta)
-        return Motion.HOLD
+        return modes.motion_of(self.kind, self.delta)
 
     @property
     def coordinate(self) -> int | None:
         """Index into ``(θ_o, s_h, s_g)`` of the coordinate this step changes (None for a hold)."""
-        return COORDINATE.get(self.kind)
+        return modes.driven_coordinate(self.kind)
 
 
 def pivot(degrees: float, timeout: float = DEFAULT_TIMEOUT) -> Step:

@@ -3,20 +3,9 @@
     python -m studies feasibility [--mu-hand 0.1:1.0:10] [--theta=-30:30:13] [--mu-ground 0.4,0.8] ...
 
 For one configuration of the reduced model below and one commanded motion (:class:`ccopt.modes.Motion`),
-a linear program (cvxpy, Clarabel) looks for a hand wrench ``w_h = (f_n, f_t, τ)`` (hand frame) and a
-ground force ``f_g`` (world) that
-
-* keep the object in static equilibrium (:data:`ccopt.contact.equilibrium_residual` ``= 0``);
-* keep every cone row the motion keeps (:func:`ccopt.modes.kept_rows`) with a margin ``≥ t``;
-* put the contact at its sliding limit in the commanded direction: the removed row's LHS is exactly 0
-  (e.g. ``μ_h f_n + f_t = 0`` for ``SLIDE_HAND_POS``);
-* press with ``f_min ≤ f_n ≤ f_max``;
-
-and maximises ``t``, the **margin** (N): the smallest kept-row LHS, torque rows divided by ``l_h`` so
-that every row is a force. The configuration is *feasible* when the margin reaches
-``min_margin``. ``HOLD`` and ``PIVOT`` keep every row (a pivot about the ground contact with both
-contacts sticking needs no row removed), so they share their answer. The ground rows of the cone are
-the ground friction cone itself through equilibrium, so they also imply ``f_g,y ≥ 0``.
+the statics LP of :func:`ccopt.statics.best_wrench` finds the hand wrench with the largest margin (N)
+on every cone row the motion keeps, the removed row at its limit, the moments balanced and
+``f_min ≤ f_n ≤ f_max``. The configuration is *feasible* when the margin reaches ``min_margin``.
 
 Reduced model (polygon-agnostic)
     The ground contact is at the origin, ``r_o = (0, 0)``; the hand is flush on a face at distance
@@ -38,7 +27,6 @@ from __future__ import annotations
 
 import argparse
 import csv
-import dataclasses
 import itertools
 import math
 import sys
@@ -46,24 +34,14 @@ from collections.abc import Sequence
 from dataclasses import dataclass, fields
 from pathlib import Path
 
-import casadi as ca
-import cvxpy as cp
 import numpy as np
 
-from ccopt import closed_loop, contact, geometry, modes
-from ccopt.casadi_eval import BufferedFunction
+from ccopt import statics
 from ccopt.cliutil import fail, print_table
-from ccopt.closed_loop import LoopParams
-from ccopt.contact import Row
 from ccopt.modes import Motion
-from ccopt.objects import PlanarObject
-from ccopt.plant.mujoco_planar import face_s_h_range, start_poses
-from ccopt.schedule import Schedule
 from studies import runner
 
 MOTIONS: tuple[Motion, ...] = tuple(Motion)
-
-_TORQUE_ROWS = (Row.HAND_PIVOT_POS, Row.HAND_PIVOT_NEG)
 
 
 @dataclass(frozen=True)
@@ -109,202 +87,25 @@ class FeasibilityParams:
             raise ValueError(f"need 0 ≤ f_min ≤ f_max, got {self.f_min}, {self.f_max}")
 
 
-# --- the linear program ---------------------------------------------------------------------------
-
-
-def _build_statics() -> ca.Function:
-    """``(θ_o, s_h, d, com_along, com_height, mass) → (J (3×5), r₀ (3))``: equilibrium as ``J x + r₀``.
-
-    ``x = (w_h, f_g)``; the residual of :data:`ccopt.contact.equilibrium_residual` is affine in ``x``
-    for a fixed geometry, so its CasADi Jacobian and its value at ``x = 0`` describe it exactly.
-    """
-    theta, s_h, d, along, height, mass = (
-        ca.SX.sym(n) for n in ("theta_o", "s_h", "d", "along", "height", "m")
-    )
-    wrench, f_ground = ca.SX.sym("w_h", 3), ca.SX.sym("f_g", 2)
-    r_o = ca.SX.zeros(2)
-    hand_pose = contact.hand_pose_kinematics(theta, s_h, 0.0, d, 0.0)
-    r_com = r_o + along * geometry.hand_tangent(theta) - height * geometry.hand_normal(theta)
-    f_grav = ca.vertcat(0.0, -mass * geometry.GRAVITY)
-    residual = contact.equilibrium_residual(hand_pose, wrench, f_ground, r_o, r_com, f_grav)
-    unknowns = ca.vertcat(wrench, f_ground)
-    return ca.Function(
-        "feasibility_statics",
-        [theta, s_h, d, along, height, mass],
-        [ca.jacobian(residual, unknowns), ca.substitute(residual, unknowns, ca.SX.zeros(5))],
-        ["theta_o", "s_h", "d", "com_along", "com_height", "mass"],
-        ["J", "r0"],
-    )
-
-
-STATICS = _build_statics()
-"""The equilibrium of the reduced model, affine in ``(w_h, f_g)``: see :func:`_build_statics`."""
-
-
-_NUMERIC_STATICS = BufferedFunction(STATICS)
-
-
-@dataclass(frozen=True)
-class _LinearProgram:
-    """The LP of one motion, canonicalised once (cvxpy DPP); set ``parameters`` and solve."""
-
-    problem: cp.Problem
-    parameters: tuple[cp.Parameter, ...]  # cone rows, cone bounds, statics J, statics r₀, (f_min, f_max)
-    unknowns: cp.Variable  # (w_h, f_g)
-    margin: cp.Variable
-
-
-@runner.thread_cached
-def _program(motion: Motion) -> _LinearProgram:
-    """The LP of ``motion`` (see the module docstring), built once per thread."""
-    kept = np.flatnonzero(modes.kept_rows(motion))
-    removed = list(modes.REMOVED_ROWS[motion])
-    rows, bounds = cp.Parameter((contact.N_CONE_ROWS, 3)), cp.Parameter(contact.N_CONE_ROWS)
-    jacobian, offset = cp.Parameter((3, 5)), cp.Parameter(3)
-    force_limits = cp.Parameter(2)
-    unknowns, margin = cp.Variable(5), cp.Variable()
-    wrench = unknowns[:3]
-    constraints = [
-        bounds[kept] - rows[kept] @ wrench >= margin,
-        jacobian @ unknowns + offset == 0,
-        wrench[0] >= force_limits[0],
-        wrench[0] <= force_limits[1],
-    ]
-    if removed:
-        constraints.append(bounds[removed] - rows[removed] @ wrench == 0)
-    problem = cp.Problem(cp.Maximize(margin), constraints)
-    return _LinearProgram(problem, (rows, bounds, jacobian, offset, force_limits), unknowns, margin)
-
-
-def scaled_cone(params: FeasibilityParams) -> tuple[np.ndarray, np.ndarray]:
-    """The true cone ``N w ≤ b`` (hand frame) with the torque rows divided by ``l_h`` (all rows in N)."""
-    rows, bounds = contact.model_friction_cone(
-        params.theta_o, params.mu_hand, params.mu_ground, params.l_h, params.mass
-    )
-    scale = np.ones(contact.N_CONE_ROWS)
-    scale[list(_TORQUE_ROWS)] = 1.0 / params.l_h
-    return rows * scale[:, None], bounds * scale
+# --- one grid point ------------------------------------------------------------------------------
 
 
 def best_wrench(params: FeasibilityParams, motion: Motion) -> tuple[float, np.ndarray | None]:
-    """The largest margin ``t`` (N) and the hand wrench ``(f_n, f_t, τ)`` achieving it.
-
-    Returns ``(-inf, None)`` when no wrench satisfies equilibrium, the force limits and the motion's
-    sliding limit at all.
-    """
-    program = _program(Motion(motion))
-    jacobian, offset = _NUMERIC_STATICS(
-        params.theta_o, params.s_h, params.d, params.com_along, params.com_height, params.mass
+    """The largest margin ``t`` (N) of ``motion`` at ``params`` and the hand wrench ``(f_n, f_t, τ)``
+    achieving it (:func:`ccopt.statics.best_wrench`); ``(-inf, None)`` where none exists."""
+    object_statics = statics.ObjectStatics.of_model(
+        params.mu_hand, params.mu_ground, params.mass, params.d, params.com_along, params.com_height
     )
-    values = (*scaled_cone(params), jacobian, offset, np.array([params.f_min, params.f_max]))
-    for parameter, value in zip(program.parameters, values, strict=True):
-        parameter.value = value
-    # warm_start=False: cvxpy would otherwise update a cached Clarabel solver, whose answer then
-    # depends (at ~1e-8) on what the process solved before — trials must be pure functions of the spec
-    program.problem.solve(solver="CLARABEL", warm_start=False)
-    if program.problem.status not in ("optimal", "optimal_inaccurate"):
-        return -math.inf, None
-    return float(program.margin.value), np.asarray(program.unknowns.value[:3])
+    result = statics.best_wrench(
+        object_statics, params.theta_o, params.s_h, motion, params.l_h, (params.f_min, params.f_max)
+    )
+    return result.margin, result.wrench
 
 
 def is_feasible(params: FeasibilityParams, motion: Motion | str) -> tuple[bool, float]:
-    """``(feasible, margin)``: can a hand wrench hold ``params`` while allowing ``motion``, and by how much.
-
-    ``margin`` (N) is the best achievable smallest kept-row LHS (torque rows over ``l_h``), negative when
-    the best wrench still violates a row, ``-inf`` when nothing satisfies equilibrium and the sliding
-    limit. Feasible means ``margin ≥ params.min_margin``.
-    """
+    """``(feasible, margin)``: can a hand wrench hold ``params`` while allowing ``motion``, by how much."""
     margin, _ = best_wrench(params, Motion(motion))
     return margin >= params.min_margin, margin
-
-
-# --- a schedule on a known object ----------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class StepFeasibility:
-    """Whether one schedule step is physically possible at its nominal configuration.
-
-    The nominal configuration is where the step starts and ends if every earlier step did exactly what
-    it commanded: ``θ_o`` moved by the pivots, ``s_h`` by the hand slides (``d`` and the centre of mass
-    are fixed in the face frame). Angles in rad, lengths in m, margins in N (see :func:`is_feasible`).
-
-    Attributes:
-        index: position of the step in the schedule.
-        kind: the step's kind (``pivot``, ``slide_hand``, ``slide_ground``, ``hold``).
-        delta: its increment (rad or m).
-        theta_o: nominal ``θ_o`` at the start and at the end of the step.
-        s_h: nominal ``s_h`` at the start and at the end of the step.
-        on_face: the whole hand stays on the face over the step.
-        margin: the smaller LP margin of the step's two ends.
-        feasible: ``on_face`` and ``margin ≥ min_margin``.
-    """
-
-    index: int
-    kind: str
-    delta: float
-    theta_o: tuple[float, float]
-    s_h: tuple[float, float]
-    on_face: bool
-    margin: float
-    feasible: bool
-
-    def describe(self) -> str:
-        """One line in degrees and millimetres, e.g. for a warning."""
-        unit, scale = ("deg", math.degrees(1.0)) if self.kind == "pivot" else ("mm", 1e3)
-        why = "the hand leaves the face" if not self.on_face else f"LP margin {self.margin:.2f} N"
-        return (
-            f"step {self.index} ({self.kind} {self.delta * scale:+.1f} {unit}) at θ_o "
-            f"{math.degrees(self.theta_o[0]):.1f}→{math.degrees(self.theta_o[1]):.1f} deg, s_h "
-            f"{1e3 * self.s_h[0]:.1f}→{1e3 * self.s_h[1]:.1f} mm: {why}"
-        )
-
-
-def schedule_feasibility(
-    obj: PlanarObject, schedule: Schedule, params: LoopParams, min_margin: float = 0.3
-) -> tuple[StepFeasibility, ...]:
-    """Check every step of ``schedule`` on the known ``obj`` as a run of ``params`` would start it.
-
-    This is the experimenter's check, not the controller's: it uses the true object (polygon, mass,
-    friction), which ccopt's estimator and controller never see. A step that is infeasible here
-    cannot be done by any controller with a flush hand and a point ground contact; a step that is
-    feasible may still fail (the reduced model ignores dynamics, and the object may roll onto
-    another vertex at large angles).
-    """
-    start = closed_loop.start_config(obj, params)
-    object_pose, hand_pose, _ = start_poses(obj, start, params.plant_params)
-    r_o = np.array([start.x_o, 0.0])
-    _, d = geometry.contact_coordinates(hand_pose, r_o)
-    com = object_pose[:2] - r_o
-    base = FeasibilityParams(
-        mu_hand=obj.mu_hand,
-        mu_ground=obj.mu_ground,
-        mass=obj.mass,
-        d=d,
-        com_along=float(com @ geometry.hand_tangent(start.theta_o)),
-        com_height=float(-(com @ geometry.hand_normal(start.theta_o))),
-        l_h=params.plant_params.l_h,
-        f_min=params.controller_params.force_limits[0],
-        f_max=params.controller_params.force_limits[1],
-        min_margin=min_margin,
-    )
-    low, high = face_s_h_range(obj, start)
-    inset = params.plant_params.l_h
-    theta, s_h = start.theta_o, start.s_h
-    checks = []
-    for index, step in enumerate(schedule.steps):
-        end_theta = theta + (step.delta if step.kind == "pivot" else 0.0)
-        end_s_h = s_h + (step.delta if step.kind == "slide_hand" else 0.0)
-        on_face = all(low + inset - 1e-9 <= s <= high - inset + 1e-9 for s in (s_h, end_s_h))
-        margin = min(
-            is_feasible(dataclasses.replace(base, theta_o=t, s_h=s), step.motion)[1]
-            for t, s in ((theta, s_h), (end_theta, end_s_h))
-        )
-        feasible = on_face and margin >= min_margin
-        ends = ((theta, end_theta), (s_h, end_s_h))
-        checks.append(StepFeasibility(index, step.kind, step.delta, *ends, on_face, margin, feasible))
-        theta, s_h = end_theta, end_s_h
-    return tuple(checks)
 
 
 # --- trials ---------------------------------------------------------------------------------------
@@ -333,11 +134,6 @@ class FeasibilityChunk:
     def params(self, mu_hand: float, theta_o: float) -> FeasibilityParams:
         shared = {f.name: getattr(self, f.name) for f in fields(self) if f.name not in ("mu_hand", "theta_o")}
         return FeasibilityParams(mu_hand=mu_hand, theta_o=theta_o, **shared)
-
-
-def infeasible_steps(obj: PlanarObject, schedule: Schedule, params: LoopParams) -> list[int]:
-    """Indices of the steps of ``schedule`` that :func:`schedule_feasibility` finds impossible on ``obj``."""
-    return [check.index for check in schedule_feasibility(obj, schedule, params) if not check.feasible]
 
 
 def feasibility_trial(chunk: FeasibilityChunk) -> dict:

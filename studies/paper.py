@@ -9,18 +9,18 @@ objects differ in their sensor noise. ``μ_hand = 0.5``, ``μ_ground = 0.8``, th
 default (``--schedule`` takes a built-in name or a file).
 
 Each trial is recorded to ``<out>/trials/<k>/`` (overwritten; ``ccopt plot`` draws its figures) and
-scored by :func:`ccopt.metrics.summarize`. Outputs in ``<out>``: ``results.json``/``results.csv`` (one
+scored by :func:`ccopt.experiment.run_experiment`. Outputs in ``<out>``: ``results.json``/``results.csv`` (one
 row per trial), ``estimation_error_boxes.png`` (Fig. 7b, pooled over the trials),
 ``realised_histogram.png`` (Fig. 9b), and the friction cones (Fig. 8), estimation traces (Fig. 7a)
 and control errors (Fig. 9a) of the first trial that finished (a trial whose run raised is an error
 row, its partial record left out of the figures).
 
-A trial *meets the closed-loop thresholds* (:class:`Thresholds`) when it completed, its median
+A trial *meets the closed-loop thresholds* (:class:`ccopt.metrics.Thresholds`) when it completed, its median
 estimation errors are at most 1° (``θ_o``) and 3 mm (``s_h``, ``s_g``), its median realised/commanded
 ratio is in [0.85, 1.15] and it had no unintended slip. A median that does not exist (the kinematics
 were never estimated) misses its threshold. The ``misses`` column names the thresholds a trial misses;
 ``impossible steps`` counts the schedule's steps that no controller could do on the trial's object
-(:func:`studies.feasibility.infeasible_steps`, the statics LP on the true object), which explains
+(the oracle of :func:`ccopt.statics.schedule_feasibility`, the statics LP on the true object), which explains
 most misses of the ``paper`` schedule (see the README).
 """
 
@@ -29,17 +29,19 @@ from __future__ import annotations
 import argparse
 import shutil
 import sys
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from ccopt import closed_loop, metrics
+from ccopt import metrics
 from ccopt.cliutil import fail, print_table
-from ccopt.closed_loop import LoopParams, RunResult
-from ccopt.objects import PlanarObject, make_object
-from ccopt.record import Record, load_record, write_summary
-from ccopt.schedule import Schedule, load_schedule
-from studies import feasibility, runner
+from ccopt.closed_loop import LoopParams
+from ccopt.experiment import run_experiment
+from ccopt.objects import make_object
+from ccopt.record import Record, load_record
+from ccopt.schedule import load_schedule
+from studies import runner
+from studies.runner import cell, slips_cell
 
 TRIALS: tuple[tuple[str, float], ...] = (
     ("paper-triangle", 0.0),
@@ -60,17 +62,6 @@ MU_GROUND = 0.8
 
 
 @dataclass(frozen=True)
-class Thresholds:
-    """What a closed-loop trial must achieve: error medians in deg and mm, the ratio band, no slips."""
-
-    theta_err_deg: float = 1.0
-    s_h_err_mm: float = 3.0
-    s_g_err_mm: float = 3.0
-    ratio_low: float = 0.85
-    ratio_high: float = 1.15
-
-
-@dataclass(frozen=True)
 class PaperTrial:
     """One trial: ``object`` plus ``added_mass`` (kg) through ``schedule`` on ``plant``, recorded to
     ``folder``; ``seed`` seeds the sensor noise."""
@@ -86,142 +77,23 @@ class PaperTrial:
     folder: str
 
 
-# --- shared by the closed-loop studies ------------------------------------------------------------
-
-
-def object_meta(obj: PlanarObject) -> dict[str, object]:
-    """The object as ``meta.json`` stores it (what :mod:`ccopt.plots` rebuilds it from)."""
-    return {
-        "name": obj.name,
-        "vertices": obj.vertices.tolist(),
-        "mass": obj.mass,
-        "mu_hand": obj.mu_hand,
-        "mu_ground": obj.mu_ground,
-    }
-
-
-def run_meta(obj: PlanarObject, schedule: Schedule, seed: int, params: LoopParams) -> dict[str, object]:
-    """``meta.json`` of a recorded run, as ``ccopt run`` writes it."""
-    return {
-        "object": object_meta(obj),
-        "schedule": schedule.to_dict(),
-        "seed": seed,
-        "params": {
-            "plant": params.plant,
-            "estimator_hz": params.estimator_hz,
-            "controller_hz": params.controller_hz,
-            "l_h": params.plant_params.l_h,
-            "start": asdict(params.start),
-        },
-    }
-
-
-def finished(result: RunResult) -> RunResult:
-    """``result``, or ``KeyboardInterrupt`` again if Ctrl-C ended the run (the study must stop too)."""
-    if result.interrupted:
-        raise KeyboardInterrupt
-    return result
-
-
-def flat_summary(summary: Mapping[str, object]) -> dict[str, object]:
-    """The scalar columns of a :func:`ccopt.metrics.summarize` summary (errors in deg and mm)."""
-    slips = [event["contact"] for event in summary["slip_events"]]
-    ratio = summary["ratio_realised_commanded"]
-    return {
-        "completed": summary["completed"],
-        "steps_done": summary["steps_done"],
-        "steps_total": summary["steps_total"],
-        "contact_kept": summary["contact_kept"],
-        **{
-            f"{key}_{stat}": summary[key][stat]
-            for key in ("theta_err_deg", "s_h_err_mm", "s_g_err_mm")
-            for stat in ("median", "p95")
-        },
-        "ratio_median": ratio["median"],
-        "ratio_q25": ratio["q25"],
-        "ratio_q75": ratio["q75"],
-        "unintended_slips": summary["unintended_slips"],
-        **{f"slips_{name}": slips.count(name) for name in metrics.CONTACT_NAMES},
-        "infeasible_share": summary["infeasible_ticks_share"],
-        "sim_time_s": summary["sim_time_s"],
-        "wall_time_s": summary["wall_time_s"],
-    }
-
-
-def _at_most(value: float | None, limit: float) -> bool:
-    return value is not None and value <= limit
-
-
-def misses(summary: Mapping[str, object], thresholds: Thresholds = Thresholds()) -> list[str]:
-    """The thresholds a run misses: ``completed``, ``theta_err``, ``s_h_err``, ``s_g_err``, ``ratio``,
-    ``slips`` (an absent median misses)."""
-    ratio = summary["ratio_realised_commanded"]["median"]
-    checks = {
-        "completed": bool(summary["completed"]),
-        "theta_err": _at_most(summary["theta_err_deg"]["median"], thresholds.theta_err_deg),
-        "s_h_err": _at_most(summary["s_h_err_mm"]["median"], thresholds.s_h_err_mm),
-        "s_g_err": _at_most(summary["s_g_err_mm"]["median"], thresholds.s_g_err_mm),
-        "ratio": ratio is not None and thresholds.ratio_low <= ratio <= thresholds.ratio_high,
-        "slips": summary["unintended_slips"] == 0,
-    }
-    return [name for name, met in checks.items() if not met]
-
-
-def cell(value: object, digits: int = 2) -> str:
-    """A table cell: numbers rounded, ``None`` as ``n/a``."""
-    if value is None:
-        return "n/a"
-    if isinstance(value, float):
-        return f"{value:.{digits}f}"
-    return str(value)
-
-
-def slips_cell(row: Mapping[str, object]) -> str:
-    """``total (g ground slides, h hand slides, p hand pivots)``."""
-    parts = " ".join(
-        f"{tag}{row[f'slips_{name}']}"
-        for tag, name in (("g", "ground_slide"), ("h", "hand_slide"), ("p", "hand_pivot"))
-    )
-    return f"{row['unintended_slips']} ({parts})"
-
-
-def closed_loop_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--schedule`` and ``--plant``, shared by the closed-loop studies."""
-    parser.add_argument(
-        "--schedule", default="paper", help="built-in (paper, smoke) or a .yaml/.json file (default: paper)"
-    )
-    parser.add_argument(
-        "--plant", choices=("planar", "panda"), default="planar", help="simulated robot (default: planar)"
-    )
-
-
-def checked_schedule(prog: str, name: str) -> Schedule:
-    """The schedule ``name``, or one line and exit 2."""
-    try:
-        return load_schedule(name)
-    except ValueError as error:
-        fail(prog, str(error))
-
-
 # --- the trial ------------------------------------------------------------------------------------
 
 
 def paper_trial(spec: PaperTrial) -> dict:
-    """Run, record and score one trial; the row of :func:`flat_summary` plus ``misses``."""
+    """Run, record and score one trial; the row of :func:`ccopt.metrics.flat_summary` plus ``misses``."""
     obj = make_object(spec.object, added_mass=spec.added_mass, mu_hand=spec.mu_hand, mu_ground=spec.mu_ground)
     schedule = load_schedule(spec.schedule)
-    params = LoopParams(plant=spec.plant)
     folder = Path(spec.folder)
     shutil.rmtree(folder, ignore_errors=True)
-    meta = run_meta(obj, schedule, spec.seed, params)
-    result = finished(closed_loop.run(obj, schedule, params, seed=spec.seed, out=folder, meta=meta))
-    recorded = load_record(folder)
-    summary = metrics.summarize(
-        recorded.data, recorded.meta["steps"], len(schedule.steps), result.sim_time, result.wall_time
-    )
-    write_summary(folder, summary)
-    infeasible = feasibility.infeasible_steps(obj, schedule, params)
-    return {**flat_summary(summary), "infeasible_steps": infeasible, "misses": misses(summary)}
+    done = run_experiment(obj, schedule, LoopParams(plant=spec.plant), seed=spec.seed, folder=folder)
+    runner.finished(done.result)
+    summary = done.summary
+    return {
+        **metrics.flat_summary(summary),
+        "impossible_steps": summary["impossible_steps"],
+        "misses": metrics.misses(summary),
+    }
 
 
 def make_specs(seed: int, count: int, schedule: str, plant: str, out: Path) -> list[PaperTrial]:
@@ -246,7 +118,7 @@ def summarise(specs: Sequence[PaperTrial], results: Sequence[dict]) -> dict:
     return {
         "trials": len(results),
         "meet_thresholds": sum(not m for m in missed.values()),
-        "thresholds": asdict(Thresholds()),
+        "thresholds": asdict(metrics.Thresholds()),
         "misses": {label(specs[k]) + f" (trial {k})": m for k, m in missed.items() if m},
         "errors": dict(runner.failures(results)),
     }
@@ -297,7 +169,7 @@ def table_rows(specs: Sequence[PaperTrial], results: Sequence[dict]) -> list[tup
                 ratio,
                 slips_cell(r),
                 f"{100 * r['infeasible_share']:.0f}",
-                str(len(r["infeasible_steps"])),
+                str(len(r["impossible_steps"])),
                 f"{r['wall_time_s']:.1f}",
                 ", ".join(r["misses"]) or "-",
             )
@@ -324,7 +196,7 @@ HEADER = (
 
 def make_parser() -> argparse.ArgumentParser:
     parser = runner.study_parser("paper", __doc__.split("\n")[0])
-    closed_loop_arguments(parser)
+    runner.closed_loop_arguments(parser)
     parser.add_argument(
         "--trials",
         type=runner.positive_int,
@@ -340,7 +212,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.trials > len(TRIALS):
         fail(parser.prog, f"--trials must be at most {len(TRIALS)}, got {args.trials}")
-    checked_schedule(parser.prog, args.schedule)
+    runner.checked_schedule(parser.prog, args.schedule)
     options = runner.RunOptions.from_args(args)
     specs = make_specs(args.seed, args.trials, args.schedule, args.plant, options.out)
     results = runner.run_study(parser.prog, paper_trial, specs, options)

@@ -52,19 +52,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ccopt import closed_loop
+from ccopt import closed_loop, metrics, modes
 from ccopt.cliutil import fail, print_table
 from ccopt.closed_loop import LoopParams, Perturbation
-from ccopt.geometry import wrap_angle
 from ccopt.objects import OBJECT_NAMES, make_object
 from ccopt.schedule import Schedule, Step
 from studies import runner
-from studies.paper import cell, finished
+from studies.runner import cell, finished
 
-COORDINATES = ("theta_o", "s_h", "s_g")
-"""The regulated coordinates, in the order of ``(θ_o, s_h, s_g)``."""
-MOTION = {"theta_o": "pivot", "s_h": "slide_hand", "s_g": "slide_ground"}
-"""The step kind that regulates each coordinate."""
 TOLERANCE = (np.deg2rad(0.5), 1e-3, 1e-3)
 """Recovered means back within this of the pre-push value, rad, m, m."""
 SCALE = (float(np.rad2deg(1.0)), 1e3, 1e3)
@@ -101,44 +96,19 @@ def regulations(coordinates: Sequence[str]) -> list[tuple[str, int]]:
 def regulation_label(coordinate: str, held: int) -> str:
     """``θ_o (pivot)``, ``s_g (slide_ground+)``, ..."""
     sign = "" if coordinate == "theta_o" else ("+" if held > 0 else "−")
-    return f"{coordinate} ({MOTION[coordinate]}{sign})"
+    return f"{coordinate} ({modes.driving_kind(coordinate)}{sign})"
 
 
 def regulation_schedule(coordinate: str, held: int, seconds: float) -> Schedule:
     """One step that holds ``coordinate`` at its starting value for ``seconds`` (see the docstring)."""
-    step = Step(MOTION[coordinate], held * VANISHING, 1e-3 * VANISHING, seconds)
+    step = Step(modes.driving_kind(coordinate), held * VANISHING, 1e-3 * VANISHING, seconds)
     return Schedule(f"regulate-{coordinate}", (step,))
-
-
-def recovery_time(time: np.ndarray, error: np.ndarray, tolerance: float) -> float | None:
-    """First time ≥ 0 (s, from the push's start) after which ``|error| ≤ tolerance`` to the end; 0 if it
-    never left, None if it is outside (or unknown, NaN) at the last sample."""
-    after = np.asarray(time) >= 0.0
-    times, errors = np.asarray(time)[after], np.abs(np.asarray(error)[after])
-    outside = np.flatnonzero(~(errors <= tolerance))
-    if outside.size == 0:
-        return 0.0
-    if outside[-1] == len(times) - 1:
-        return None
-    return float(times[outside[-1] + 1])
 
 
 def signed_peak(values: np.ndarray) -> float:
     """The value of largest magnitude (NaN ignored; 0 for no values)."""
     finite = values[np.isfinite(values)]
     return float(finite[np.argmax(np.abs(finite))]) if finite.size else 0.0
-
-
-def changes(values: np.ndarray, reference: np.ndarray) -> np.ndarray:
-    """``values − reference`` per coordinate ``(θ_o, s_h, s_g)``, the angle wrapped."""
-    delta = np.asarray(values) - reference
-    delta[:, 0] = wrap_angle(delta[:, 0])
-    return delta
-
-
-def slid(time: np.ndarray, rates: np.ndarray) -> np.ndarray:
-    """Distance each contact truly slid (m): ``∫ |slip speed| dt`` per column of ``rates`` (m/s)."""
-    return np.sum(np.abs(rates) * np.diff(time, prepend=time[0])[:, None], axis=0)
 
 
 def measured_coordinates(samples: Mapping[str, np.ndarray], use_estimate: bool) -> np.ndarray:
@@ -150,7 +120,7 @@ def measured_coordinates(samples: Mapping[str, np.ndarray], use_estimate: bool) 
 
 def perturbation_trial(spec: Push) -> dict:
     """Regulate, push, and score the error of the regulated coordinate (deg or mm in the result)."""
-    k = COORDINATES.index(spec.coordinate)
+    k = modes.COORDINATES.index(spec.coordinate)
     push = Perturbation(spec.push_at, (spec.direction * spec.force, 0.0), spec.duration)
     params = LoopParams(plant=spec.plant, perturbations=(push,))
     schedule = regulation_schedule(spec.coordinate, spec.held, spec.push_at + spec.window)
@@ -160,17 +130,17 @@ def perturbation_trial(spec: Push) -> dict:
     before = max(int(np.searchsorted(time, 0.0)) - 1, 0)
     start = min(int(np.searchsorted(samples["time"], result.steps[0].start_time)), len(time) - 1)
     use_estimate = bool(samples["est_kinematics_valid"][start])
-    truth = changes(samples["true_coordinates"], samples["true_coordinates"][before])
+    truth = metrics.coordinate_changes(samples["true_coordinates"], samples["true_coordinates"][before])
     seen = measured_coordinates(samples, use_estimate)
-    measured = changes(seen, seen[before])
+    measured = metrics.coordinate_changes(seen, seen[before])
     after = time >= 0.0
-    rejoined = recovery_time(time, truth[:, k], TOLERANCE[k])
+    rejoined = metrics.recovery_time(time, truth[:, k], TOLERANCE[k])
     contact_kept = bool(np.all(samples["true_contacts"][after]))
     shown = time >= -BEFORE
-    slid_hand, slid_ground = slid(time[after], samples["true_slip_rates"][after])
+    slid_hand, slid_ground = metrics.slip_distance(time[after], samples["true_slip_rates"][after])
     peaks = {
         f"peak_{name}_{UNIT[j]}": signed_peak(truth[after, j]) * SCALE[j]
-        for j, name in enumerate(COORDINATES)
+        for j, name in enumerate(modes.COORDINATES)
     }
     return {
         "unit": UNIT[k],
@@ -262,7 +232,7 @@ def table_rows(specs: Sequence[Push], results: Sequence[dict]) -> list[tuple[str
                 cell(r["measured_final_error"]),
                 f"{cell(r['slid_hand_mm'], 1)} / {cell(r['slid_ground_mm'], 1)}",
                 " / ".join(
-                    cell(r[f"peak_{name}_{unit}"]) for name, unit in zip(COORDINATES, UNIT, strict=True)
+                    cell(r[f"peak_{name}_{unit}"]) for name, unit in zip(modes.COORDINATES, UNIT, strict=True)
                 ),
                 why_not_recovered(r) or "-",
             )
@@ -321,7 +291,7 @@ def write_figure(path: Path, specs: Sequence[Push], results: Sequence[dict]) -> 
     figure = Figure(figsize=(10, 2.3 * len(rows) + 0.6), layout="constrained")
     axes = figure.subplots(len(rows), 2, sharex=True, squeeze=False)
     for (coordinate, held), pair in zip(rows, axes, strict=True):
-        k = COORDINATES.index(coordinate)
+        k = modes.COORDINATES.index(coordinate)
         for direction, ax in zip((1, -1), pair, strict=True):
             runs = [
                 (s, r)
@@ -357,12 +327,12 @@ def force_list(value: str) -> tuple[float, ...]:
 
 
 def coordinate_list(value: str) -> tuple[str, ...]:
-    """argparse type: a comma-separated subset of :data:`COORDINATES`."""
+    """argparse type: a comma-separated subset of :data:`modes.COORDINATES`."""
     names = tuple(v.strip() for v in value.split(","))
-    unknown = [n for n in names if n not in COORDINATES]
+    unknown = [n for n in names if n not in modes.COORDINATES]
     if unknown:
         raise argparse.ArgumentTypeError(
-            f"unknown coordinate {unknown[0]!r}; expected {', '.join(COORDINATES)}"
+            f"unknown coordinate {unknown[0]!r}; expected {', '.join(modes.COORDINATES)}"
         )
     return names
 
@@ -374,7 +344,7 @@ def make_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--coordinates",
         type=coordinate_list,
-        default=COORDINATES,
+        default=modes.COORDINATES,
         metavar="LIST",
         help="regulated coordinates (default: theta_o,s_h,s_g)",
     )

@@ -57,14 +57,11 @@ _DEFAULT_CHANGE = {Motion.HOLD: 0.0, Motion.PIVOT: 2.0} | {
 the minimising plane cuts the region as in the paper's figure (7.2°, the paper's whole increment,
 asks for more than one tick allows and the plane misses the region)."""
 
-_COMMANDED = {  # which column of the admissible-motion vectors (v_θ, v_h, v_g) a motion's cost drives
-    Motion.HOLD: 0,
-    Motion.PIVOT: 0,
-    Motion.SLIDE_HAND_POS: 1,
-    Motion.SLIDE_HAND_NEG: 1,
-    Motion.SLIDE_GROUND_POS: 2,
-    Motion.SLIDE_GROUND_NEG: 2,
-}
+def _commanded(motion: Motion) -> int:
+    """The column of the admissible-motion vectors ``(v_θ, v_h, v_g)`` a motion's cost drives (a hold
+    draws the pivot's)."""
+    driven = modes.driven_coordinate(motion)
+    return modes.THETA_O if driven is None else driven
 
 
 @dataclass(frozen=True)
@@ -134,6 +131,7 @@ def control_input(state: RegionState) -> ControlInput:
         cone_rows=rows,
         cone_bounds=bounds,
         row_valid=np.ones(contact.N_CONE_ROWS, dtype=bool),
+        mu_h=state.mu_hand,
         l_h=state.l_h,
         hand_angle=state.theta_o,
         s_h=state.s_h,
@@ -146,7 +144,7 @@ def control_input(state: RegionState) -> ControlInput:
 def command(state: RegionState) -> Command:
     """The commanded targets: the motion's coordinate moved by ``change``, the others held."""
     targets = np.array([state.theta_o, state.s_h, 0.0])
-    targets[_COMMANDED[state.motion]] += state.change
+    targets[_commanded(state.motion)] += state.change
     return Command(motion=state.motion, targets=targets)
 
 
@@ -219,7 +217,7 @@ def compute_region(state: RegionState, controller: Controller) -> Region:
     vertices = halfspace_vertices(all_rows, all_upper)
     clipped = vertices is not None and bool(np.any(np.isclose(np.abs(vertices), BOX, rtol=1e-9)))
     vectors = contact.admissible_motions(state.theta_o, state.s_h, state.d)
-    direction = vectors[:, _COMMANDED[state.motion]]
+    direction = vectors[:, _commanded(state.motion)]
     term = int(np.argmin(np.linalg.norm(instance.directions - direction, axis=1)))
     target = float(instance.targets[term])
     plane = plane_section(all_rows, all_upper, direction / PLOT_SCALE, target)
@@ -232,7 +230,7 @@ def compute_region(state: RegionState, controller: Controller) -> Region:
         target,
         plane,
         clipped,
-        controller.params.force_limits,
+        controller.hand.force_limits,
     )
 
 
@@ -396,7 +394,7 @@ def make_parser() -> argparse.ArgumentParser:
 
 def state_from_args(args: argparse.Namespace) -> RegionState:
     motion = Motion(args.motion)
-    angular = _COMMANDED[motion] == 0
+    angular = _commanded(motion) == 0
     change = args.change if args.change is not None else _DEFAULT_CHANGE[motion]
     return RegionState(
         theta_o=float(np.deg2rad(args.theta)),

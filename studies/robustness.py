@@ -5,21 +5,12 @@
 Each trial draws, from its own seed (:func:`studies.runner.trial_seeds` of ``--seed``), one of the
 five shapes (:data:`SHAPES`) with side 7–19 cm (a rectangle draws width and height in 7–19 cm),
 mass 0.2–0.95 kg, ``μ_hand`` 0.3–0.7 and ``μ_ground`` 0.4–0.9 (all uniform), runs the schedule in
-closed loop (no record folder) and scores it with :func:`ccopt.metrics.summarize`.
+closed loop (no record folder) and scores it with :func:`ccopt.experiment.run_experiment`.
 
 A trial *succeeds* when it completed (every step reached, both contacts kept) without an unintended
-slip. The causes of a failure (:func:`failure_causes`, several may apply, listed in this order):
-
-``infeasible step``        the schedule has a step no controller can do on this object (the statics LP
-                           of :func:`studies.feasibility.infeasible_steps` on the true object);
-``loss of contact``        a contact was open in more than 1 % of the samples;
-``slip at the ground``     the ground contact slid when it had to stick;
-``slip at the hand``       the hand slid along the object when it had to stick;
-``hand pivot``             the hand turned against the object when it had to stay flush;
-``infeasible QP``          more than 20 % of the control ticks had no feasible step;
-``estimator reset``        the estimated kinematics became invalid after having been valid
-                           (counted from the samples: ``est_kinematics_valid`` going true → false);
-``timeout``                a step was not reached and none of the above applies.
+slip; otherwise :func:`ccopt.metrics.failure_causes` names why (several may apply): an ``impossible
+step`` (the oracle's statics LP on the true object), ``loss of contact``, a slip at the ground or the
+hand, a ``hand pivot``, an ``infeasible QP``, an ``estimator reset`` or a ``timeout``.
 
 An object whose hand face is shorter than the hand is ``does not fit the hand`` (not run); a trial
 that raised is ``run error`` with its message. Outputs in ``<out>``: ``results.json``/``results.csv``
@@ -38,22 +29,15 @@ from pathlib import Path
 
 import numpy as np
 
-from ccopt import closed_loop, metrics
+from ccopt import metrics
 from ccopt.cliutil import print_table
 from ccopt.closed_loop import LoopParams
+from ccopt.experiment import run_experiment
 from ccopt.objects import PlanarObject, make_object
-from ccopt.plant.mujoco_planar import hand_over_vertex
+from ccopt.plant.placement import hand_over_vertex
 from ccopt.schedule import load_schedule
-from studies import feasibility, runner
-from studies.paper import (
-    cell,
-    checked_schedule,
-    closed_loop_arguments,
-    finished,
-    flat_summary,
-    misses,
-    slips_cell,
-)
+from studies import runner
+from studies.runner import cell, slips_cell
 
 SHAPES = ("triangle", "square", "rectangle", "pentagon", "hexagon")
 SIDE = (0.07, 0.19)
@@ -62,32 +46,10 @@ MASS = (0.2, 0.95)
 """Range of the mass, kg."""
 MU_HAND = (0.3, 0.7)
 MU_GROUND = (0.4, 0.9)
-INFEASIBLE_SHARE = 0.2
-"""A run with more than this share of infeasible control ticks fails (also) by ``infeasible QP``."""
-
-INFEASIBLE_STEP = "infeasible step"
-LOSS_OF_CONTACT = "loss of contact"
-GROUND_SLIP = "slip at the ground"
-HAND_SLIP = "slip at the hand"
-HAND_PIVOT = "hand pivot"
-INFEASIBLE = "infeasible QP"
-ESTIMATOR_RESET = "estimator reset"
-TIMEOUT = "timeout"
 DOES_NOT_FIT = "does not fit the hand"
 RUN_ERROR = "run error"
-CAUSES = (
-    INFEASIBLE_STEP,
-    LOSS_OF_CONTACT,
-    GROUND_SLIP,
-    HAND_SLIP,
-    HAND_PIVOT,
-    INFEASIBLE,
-    ESTIMATOR_RESET,
-    TIMEOUT,
-    DOES_NOT_FIT,
-    RUN_ERROR,
-)
-_SLIP_CAUSES = {"ground_slide": GROUND_SLIP, "hand_slide": HAND_SLIP, "hand_pivot": HAND_PIVOT}
+CAUSES = (*metrics.CAUSES, DOES_NOT_FIT, RUN_ERROR)
+"""Every cause a trial can report: a run's (:func:`ccopt.metrics.failure_causes`) and the study's own."""
 
 
 @dataclass(frozen=True)
@@ -124,56 +86,30 @@ def build_object(spec: RandomObject) -> PlanarObject:
 def fits_hand(obj: PlanarObject, params: LoopParams) -> bool:
     """Whether the hand fits on the start face (else the run cannot start)."""
     try:
-        hand_over_vertex(obj, params.start, params.plant_params.l_h)
+        hand_over_vertex(obj, params.start, params.hand)
     except ValueError:
         return False
     return True
 
 
-def kinematics_resets(valid: np.ndarray) -> int:
-    """How often the estimated kinematics went from valid to invalid."""
-    flags = np.asarray(valid, dtype=bool)
-    return int(np.sum(flags[:-1] & ~flags[1:]))
-
-
-def failure_causes(summary: Mapping[str, object]) -> list[str]:
-    """Why a run failed (empty if it succeeded), from its summary, ``kinematics_resets`` and
-    ``infeasible_steps`` (indices of the physically impossible steps)."""
-    if summary["completed"] and summary["unintended_slips"] == 0:
-        return []
-    slid = {event["contact"] for event in summary["slip_events"]}
-    flags = {
-        INFEASIBLE_STEP: bool(summary.get("infeasible_steps")),
-        LOSS_OF_CONTACT: not summary["contact_kept"],
-        **{cause: contact in slid for contact, cause in _SLIP_CAUSES.items()},
-        INFEASIBLE: summary["infeasible_ticks_share"] > INFEASIBLE_SHARE,
-        ESTIMATOR_RESET: summary.get("kinematics_resets", 0) > 0,
-    }
-    causes = [cause for cause in CAUSES if flags.get(cause)]
-    return causes or [TIMEOUT]
-
-
 def robustness_trial(spec: RandomObject) -> dict:
-    """Run one random object; :func:`studies.paper.flat_summary` plus success and causes."""
+    """Run one random object; :func:`ccopt.metrics.flat_summary` plus success and causes."""
     obj = build_object(spec)
     params = LoopParams(plant=spec.plant)
     if not fits_hand(obj, params):
         return {"fits_hand": False, "success": False, "causes": [DOES_NOT_FIT]}
-    schedule = load_schedule(spec.schedule)
-    result = finished(closed_loop.run(obj, schedule, params, seed=spec.seed))
-    steps = [vars(step) for step in result.steps]
-    summary = metrics.summarize(result.samples, steps, len(schedule.steps), result.sim_time, result.wall_time)
-    summary["kinematics_resets"] = kinematics_resets(result.samples["est_kinematics_valid"])
-    summary["infeasible_steps"] = feasibility.infeasible_steps(obj, schedule, params)
-    causes = failure_causes(summary)
+    done = run_experiment(obj, load_schedule(spec.schedule), params, seed=spec.seed)
+    runner.finished(done.result)
+    summary = done.summary
+    causes = metrics.failure_causes(summary)
     return {
         "fits_hand": True,
-        **flat_summary(summary),
+        **metrics.flat_summary(summary),
         "kinematics_resets": summary["kinematics_resets"],
-        "infeasible_steps": summary["infeasible_steps"],
+        "impossible_steps": summary["impossible_steps"],
         "success": not causes,
         "causes": causes,
-        "misses": misses(summary),
+        "misses": metrics.misses(summary),
     }
 
 
@@ -206,9 +142,9 @@ def summarise(specs: Sequence[RandomObject], results: Sequence[dict]) -> dict:
         "successes": sum(bool(r.get("success")) for r in results),
         "success_rate": sum(bool(r.get("success")) for r in results) / len(results),
         "meet_paper_thresholds": sum(r.get("misses") == [] for r in results),
-        "feasible_schedules": sum(r.get("infeasible_steps") == [] for r in results),
+        "feasible_schedules": sum(r.get("impossible_steps") == [] for r in results),
         "successes_on_feasible_schedules": sum(
-            bool(r.get("success")) and r.get("infeasible_steps") == [] for r in results
+            bool(r.get("success")) and r.get("impossible_steps") == [] for r in results
         ),
         "errors_over_trials": {key: _quartiles(column(results, key)) for key in ERROR_COLUMNS},
         "causes": dict(Counter(c for found in causes for c in found)),
@@ -309,7 +245,7 @@ def overview_rows(summary: Mapping[str, object]) -> list[tuple[str, ...]]:
 
 def make_parser() -> argparse.ArgumentParser:
     parser = runner.study_parser("robustness", __doc__.split("\n")[0])
-    closed_loop_arguments(parser)
+    runner.closed_loop_arguments(parser)
     parser.add_argument(
         "--trials", type=runner.positive_int, default=50, metavar="N", help="random objects (default: 50)"
     )
@@ -319,7 +255,7 @@ def make_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = make_parser()
     args = parser.parse_args(argv)
-    checked_schedule(parser.prog, args.schedule)
+    runner.checked_schedule(parser.prog, args.schedule)
     seeds = runner.trial_seeds(args.seed, args.trials)
     specs = [draw_object(k, seed, args.schedule, args.plant) for k, seed in enumerate(seeds)]
     options = runner.RunOptions.from_args(args)

@@ -18,6 +18,9 @@ Trial functions may run in several threads of one Dask worker at once: per-proce
 thread-safe (parametrised cvxpy problems, simulators) belongs in a
 :func:`thread_cached` builder.
 
+The closed-loop studies share their command-line options (:func:`closed_loop_arguments`), table cells
+(:func:`cell`, :func:`slips_cell`) and the stop on Ctrl-C (:func:`finished`).
+
 Each study module has ``main(argv) -> int``; :func:`study_modules` is the registry behind
 ``python -m studies NAME``.
 """
@@ -36,7 +39,7 @@ import sys
 import threading
 import time
 import traceback
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -48,6 +51,8 @@ import numpy as np
 from tqdm import tqdm
 
 from ccopt.cliutil import OneLineParser, fail, write_json
+from ccopt.closed_loop import RunResult
+from ccopt.schedule import Schedule, load_schedule
 
 Spec = Any
 """A trial spec: a dataclass instance or a dict, JSON-serialisable once through :func:`spec_dict`."""
@@ -363,3 +368,49 @@ def write_results(out: Path, specs: Sequence[Spec], results: Sequence[dict], sum
 def failures(results: Sequence[dict]) -> list[tuple[int, str]]:
     """``(index, message)`` of the trials that raised."""
     return [(k, r["error"]) for k, r in enumerate(results) if "error" in r]
+
+
+# --- shared by the closed-loop studies ------------------------------------------------------------
+
+
+def finished(result: RunResult) -> RunResult:
+    """``result``, or ``KeyboardInterrupt`` again if Ctrl-C ended the run (the study must stop too)."""
+    if result.interrupted:
+        raise KeyboardInterrupt
+    return result
+
+
+def cell(value: object, digits: int = 2) -> str:
+    """A table cell: numbers rounded, ``None`` as ``n/a``."""
+    if value is None:
+        return "n/a"
+    if isinstance(value, float):
+        return f"{value:.{digits}f}"
+    return str(value)
+
+
+def slips_cell(row: Mapping[str, object]) -> str:
+    """``total (g ground slides, h hand slides, p hand pivots)`` of a ``flat_summary`` row."""
+    parts = " ".join(
+        f"{tag}{row[f'slips_{name}']}"
+        for tag, name in (("g", "ground_slide"), ("h", "hand_slide"), ("p", "hand_pivot"))
+    )
+    return f"{row['unintended_slips']} ({parts})"
+
+
+def closed_loop_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--schedule`` and ``--plant``, shared by the closed-loop studies."""
+    parser.add_argument(
+        "--schedule", default="paper", help="built-in (paper, smoke) or a .yaml/.json file (default: paper)"
+    )
+    parser.add_argument(
+        "--plant", choices=("planar", "panda"), default="planar", help="simulated robot (default: planar)"
+    )
+
+
+def checked_schedule(prog: str, name: str) -> Schedule:
+    """The schedule ``name``, or one line and exit 2."""
+    try:
+        return load_schedule(name)
+    except ValueError as error:
+        fail(prog, str(error))

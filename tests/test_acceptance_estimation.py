@@ -25,7 +25,8 @@ import numpy as np
 import pytest
 
 from ccopt import geometry
-from ccopt.estimation import Estimator, EstimatorParams, HandFrictionParams, KinematicsParams
+from ccopt.estimation import Estimator
+from ccopt.hand import Hand
 from ccopt.objects import isosceles_triangle
 from ccopt.plant.base import PlantParams, StartConfig
 from ccopt.plant.mujoco_planar import PlanarPlant
@@ -92,15 +93,12 @@ class Recording:
 def record(seed: int = 0) -> Recording:
     """Drive the plant through :func:`script`, feeding every sensor sample to a fresh estimator."""
     obj = isosceles_triangle(BASE, math.hypot(0.5 * BASE, HEIGHT), mass=MASS, mu_hand=MU_H, mu_ground=MU_G)
-    plant = PlanarPlant(obj, PlantParams(l_h=L_H), StartConfig(theta_o=0.0, s_h=0.0, normal_force=PRESS))
+    hand = Hand(half_length=L_H)
+    plant = PlanarPlant(obj, PlantParams(), StartConfig(theta_o=0.0, s_h=0.0, normal_force=PRESS), hand)
     sensors = Sensors(plant, SensorParams(), seed)
-    estimator = Estimator(
-        EstimatorParams(
-            friction=HandFrictionParams(half_length=L_H), kinematics=KinematicsParams(half_length=L_H)
-        )
-    )
+    estimator = Estimator(hand)
     start = plant.truth()  # the script is planned from the start configuration only
-    stiffness = np.array(plant.params.K[:2])
+    stiffness = np.array(plant.hand.stiffness[:2])
     state = {"theta": 0.0, "s_h": 0.0, "x_o": 0.0, "lean": 0.0, "push": PRESS}
     samples = []
     for _, duration, change in script():

@@ -6,6 +6,7 @@ import pytest
 from ccopt import contact
 from ccopt.contact import Row
 from ccopt.control.controller import Command, ControlInput, Controller, ControllerParams
+from ccopt.hand import Hand
 from ccopt.modes import Motion
 
 THETA, S_H, S_G, D = 0.1, 0.01, 0.0, 0.08
@@ -14,7 +15,7 @@ MU_H, MU_G, L_H, MASS = 0.5, 0.8, 0.05, 0.3
 
 @pytest.fixture(scope="module")
 def controller():
-    return Controller(ControllerParams())
+    return Controller(params=ControllerParams())
 
 
 def state(wrench=(10.0, 0.5, 0.0), valid=True):
@@ -24,6 +25,7 @@ def state(wrench=(10.0, 0.5, 0.0), valid=True):
         cone_rows=rows,
         cone_bounds=bounds,
         row_valid=np.ones(6, dtype=bool),
+        mu_h=MU_H,
         l_h=L_H,
         hand_angle=THETA,
         s_h=S_H,
@@ -79,7 +81,11 @@ def test_naive_v_theta_before_the_kinematics_are_known(controller):
 
 
 def test_bad_parameters_raise():
-    with pytest.raises(ValueError, match="convergence"):
-        ControllerParams(convergence=1.5)
-    with pytest.raises(ValueError, match="f_min"):
-        ControllerParams(force_limits=(15.0, 10.0))
+    with pytest.raises(ValueError, match="convergence_rate"):
+        ControllerParams(convergence_rate=-1.0)
+    with pytest.raises(ValueError, match="max_speed"):
+        ControllerParams(max_speed=(0.1, 0.1))
+    with pytest.raises(ValueError, match="force limits"):
+        Controller(Hand(force_limits=(15.0, 25.0)), params=ControllerParams(normal_force=10.0))
+    with pytest.raises(ValueError, match="period"):
+        Controller(period=0.0)

@@ -10,6 +10,7 @@ import pytest
 
 from ccopt import contact, geometry
 from ccopt.estimation import Estimator, EstimatorParams, HandFrictionParams, KinematicsParams, replay
+from ccopt.hand import Hand
 from ccopt.modes import ContactMode, HandGeometry
 
 MU_H, MU_G, MASS, L_H, D = 0.5, 0.8, 0.3, 0.05, 0.06
@@ -89,7 +90,7 @@ def synthetic_run(seed: int) -> Run:
 @pytest.fixture(scope="module")
 def run_and_estimates():
     run = synthetic_run(0)
-    return run, replay(run.times, run.poses, run.wrenches)
+    return run, replay(run.times, run.poses, run.wrenches, Hand(half_length=L_H))
 
 
 def test_sliding_is_almost_never_reported_as_sticking(run_and_estimates):
@@ -183,11 +184,11 @@ def test_no_contact_force_means_not_in_contact():
 
 def test_replay_is_the_same_as_updating_one_by_one():
     run = synthetic_run(2)
-    estimator = Estimator()
+    estimator = Estimator(Hand(half_length=L_H))
     one_by_one = [
         estimator.update(*sample) for sample in zip(run.times[:200], run.poses, run.wrenches, strict=False)
     ]
-    replayed = replay(run.times[:200], run.poses[:200], run.wrenches[:200])
+    replayed = replay(run.times[:200], run.poses[:200], run.wrenches[:200], Hand(half_length=L_H))
     for a, b in zip(one_by_one, replayed, strict=True):
         np.testing.assert_array_equal(a.margins, b.margins)
         assert a.configuration == b.configuration
@@ -196,10 +197,8 @@ def test_replay_is_the_same_as_updating_one_by_one():
 def test_bad_input_raises_naming_the_problem():
     with pytest.raises(ValueError, match="shape"):
         Estimator().update(0.0, [0.0, 0.0], [1.0, 0.0, 0.0])
-    with pytest.raises(ValueError, match="half_length"):
-        EstimatorParams(
-            friction=HandFrictionParams(half_length=0.05), kinematics=KinematicsParams(half_length=0.06)
-        )
+    with pytest.raises(TypeError, match="hand"):
+        Estimator(EstimatorParams())
     with pytest.raises(TypeError, match="friction"):
         EstimatorParams(friction=KinematicsParams())
     with pytest.raises(ValueError, match="contact_force"):
@@ -212,10 +211,7 @@ def test_conservative_ground_reports_do_not_stop_the_kinematics():
     rng = np.random.default_rng(3)
     times = np.arange(3000) / RATE
     r_o = np.array([0.10, 0.0])
-    parts = {"half_length": L_H}
-    estimator = Estimator(
-        EstimatorParams(friction=HandFrictionParams(**parts), kinematics=KinematicsParams(**parts))
-    )
+    estimator = Estimator(Hand(half_length=L_H))
     reported_sliding = 0
     for t in times:
         theta = math.radians(10.0) * math.sin(2.0 * math.pi * t / 1.5)

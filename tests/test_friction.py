@@ -45,7 +45,7 @@ def feed(estimator: HandFrictionEstimator, samples: np.ndarray, rng: np.random.G
 @pytest.mark.parametrize("mu_h", [0.3, 0.5, 0.8])
 def test_mu_h_within_five_percent_after_sliding_both_ways(mu_h):
     rng = np.random.default_rng(int(mu_h * 100))
-    estimator = HandFrictionEstimator()
+    estimator = HandFrictionEstimator(0.05)
     feed(estimator, wrenches(mu_h, 3000, None, rng), rng)
     assert estimator.params.mu_prior <= estimator.mu_h < mu_h  # only sticking seen: a lower bound
     mixed = np.vstack([wrenches(mu_h, 3000, None, rng), wrenches(mu_h, 300, Row.HAND_SLIDE_POS, rng)])
@@ -58,7 +58,7 @@ def test_mu_h_within_five_percent_after_sliding_both_ways(mu_h):
 
 
 def test_mu_h_never_drops_below_the_prior():
-    estimator = HandFrictionEstimator(HandFrictionParams(mu_prior=0.1))
+    estimator = HandFrictionEstimator(0.05, HandFrictionParams(mu_prior=0.1))
     assert estimator.mu_h == 0.1 and not estimator.valid
     for _ in range(200):
         estimator.update(10.0, 0.2)  # |f_t| below the tangential allowance: ratio 0
@@ -67,7 +67,7 @@ def test_mu_h_never_drops_below_the_prior():
 
 
 def test_samples_without_a_clear_contact_force_or_not_finite_are_ignored():
-    estimator = HandFrictionEstimator(HandFrictionParams(min_normal_force=3.0))
+    estimator = HandFrictionEstimator(0.05, HandFrictionParams(min_normal_force=3.0))
     for f_n, f_t in ((3.0, 3.0), (0.5, 1.0), (-5.0, 1.0), (math.nan, 1.0), (10.0, math.inf)):
         estimator.update(f_n, f_t)
     assert estimator.sample_count == 0
@@ -79,8 +79,7 @@ def test_samples_without_a_clear_contact_force_or_not_finite_are_ignored():
 
 
 def test_rows_are_the_contact_model_hand_rows_with_the_torque_margin():
-    params = HandFrictionParams(half_length=0.06, torque_margin=0.8)
-    estimator = HandFrictionEstimator(params)
+    estimator = HandFrictionEstimator(0.06, HandFrictionParams(torque_margin=0.8))
     for _ in range(10):
         estimator.update(10.0, 5.0)
     n_rows, b = estimator.rows()
@@ -99,7 +98,6 @@ def test_rows_are_the_contact_model_hand_rows_with_the_torque_margin():
         ("min_normal_force", 0.0, ValueError),
         ("level", 1.0, ValueError),
         ("min_samples", 0, ValueError),
-        ("half_length", -0.05, ValueError),
         ("torque_margin", 1.2, ValueError),
         ("torque_margin", "0.8", TypeError),
         ("min_samples", 10.5, TypeError),

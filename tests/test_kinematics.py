@@ -44,7 +44,7 @@ def pivot_about_ground(estimator: KinematicEstimator, rng: np.random.Generator, 
 
 @pytest.mark.parametrize("seed", range(4))
 def test_a_rigid_rotation_about_the_ground_contact_gives_d_and_r_o_within_a_millimetre(seed):
-    estimate = pivot_about_ground(KinematicEstimator(), np.random.default_rng(seed))
+    estimate = pivot_about_ground(KinematicEstimator(L_H), np.random.default_rng(seed))
     assert estimate.contact_valid and estimate.s_h_valid and estimate.theta_o_valid
     assert abs(estimate.d - D) < 1e-3
     assert np.all(np.abs(estimate.r_o - R_O) < 1e-3)
@@ -53,7 +53,7 @@ def test_a_rigid_rotation_about_the_ground_contact_gives_d_and_r_o_within_a_mill
 
 
 def test_estimates_are_invalid_until_the_hand_has_rotated_enough():
-    estimator, rng = KinematicEstimator(), np.random.default_rng(5)
+    estimator, rng = KinematicEstimator(L_H), np.random.default_rng(5)
     for theta in np.radians(np.linspace(0.0, 1.0, 200)):
         estimate = step(estimator, measured(geometry.hand_pose_from_contact(theta, S_H, D, R_O), rng))
     assert estimate.theta_o_valid and estimate.theta_o == pytest.approx(math.radians(1.0), abs=0.01)
@@ -62,7 +62,7 @@ def test_estimates_are_invalid_until_the_hand_has_rotated_enough():
 
 
 def test_the_papers_regression_alone_works_while_the_hand_slides():
-    estimator, rng = KinematicEstimator(), np.random.default_rng(6)
+    estimator, rng = KinematicEstimator(L_H), np.random.default_rng(6)
     angles = np.radians(30.0) * np.sin(np.linspace(0.0, 2.0 * np.pi, 3000))
     positions = S_H + 0.02 * np.sin(np.linspace(0.0, 6.0 * np.pi, 3000))
     for theta, s_h in zip(angles, positions, strict=True):
@@ -74,7 +74,7 @@ def test_the_papers_regression_alone_works_while_the_hand_slides():
 
 
 def test_s_h_follows_a_hand_slide():
-    estimator, rng = KinematicEstimator(), np.random.default_rng(7)
+    estimator, rng = KinematicEstimator(L_H), np.random.default_rng(7)
     pivot_about_ground(estimator, rng)
     errors = []
     for s_h in np.linspace(S_H, S_H + 0.03, 300):
@@ -89,7 +89,7 @@ def test_s_h_follows_a_hand_slide():
 
 
 def test_a_ground_slide_moves_r_o_rigidly_with_the_hand():
-    estimator, rng = KinematicEstimator(), np.random.default_rng(8)
+    estimator, rng = KinematicEstimator(L_H), np.random.default_rng(8)
     pivot_about_ground(estimator, rng)
     for x_o in np.linspace(R_O[0], R_O[0] + 0.03, 300):
         r_o = np.array([x_o, R_O[1]])
@@ -118,7 +118,7 @@ def test_pivot_contact_inverts_the_pivoting_geometry(sign):
 
 def test_a_pivoting_hand_still_gives_theta_o_and_s_h():
     # θ_o is only as good as the lever from the ground contact to the hand end: 0.3 mm / 90 mm ≈ 0.2°
-    estimator, rng = KinematicEstimator(KinematicsParams(half_length=L_H)), np.random.default_rng(9)
+    estimator, rng = KinematicEstimator(L_H), np.random.default_rng(9)
     pivot_about_ground(estimator, rng)
     pivoting = ContactConfiguration(hand_geometry=HandGeometry.PIVOT_POS)  # Δθ = θ_o − θ_h > 0
     s_h = -0.04
@@ -129,7 +129,7 @@ def test_a_pivoting_hand_still_gives_theta_o_and_s_h():
 
 
 def test_indeterminate_motion_resets_and_lost_contact_keeps_the_ground_contact():
-    estimator, rng = KinematicEstimator(), np.random.default_rng(10)
+    estimator, rng = KinematicEstimator(L_H), np.random.default_rng(10)
     pivot_about_ground(estimator, rng)
     pose = measured(geometry.hand_pose_from_contact(0.0, S_H, D, R_O), rng)
     away = step(estimator, pose, in_contact=False)
@@ -143,7 +143,6 @@ def test_indeterminate_motion_resets_and_lost_contact_keeps_the_ground_contact()
 @pytest.mark.parametrize(
     ("field", "value", "error"),
     [
-        ("half_length", 0.0, ValueError),
         ("excitation_angle", -0.1, ValueError),
         ("position_noise", math.nan, ValueError),
         ("prior_std", 0.0, ValueError),
@@ -157,7 +156,7 @@ def test_bad_parameters_raise_naming_the_field(field, value, error):
 
 def test_an_unreported_hand_slide_is_caught_by_the_innovation_gate():
     """The modes say sticking, the hand really slides: eq. 21's innovations re-estimate ``s_h``."""
-    estimator, rng = KinematicEstimator(), np.random.default_rng(11)
+    estimator, rng = KinematicEstimator(L_H), np.random.default_rng(11)
     pivot_about_ground(estimator, rng)
     positions = np.linspace(S_H, S_H + 0.02, 200)
     for s_h in positions:
@@ -174,7 +173,7 @@ def test_an_unreported_move_of_the_ground_contact_resets_instead_of_keeping_a_wr
     """The modes say sticking, but the object has rolled onto a vertex 5 mm higher: eq. 20 cannot
     explain it, and after ``slip_samples`` rejections the estimate resets rather than report the old
     ``r_o`` as valid. (A move along ``e_t`` alone is kinematically a hand slide: see the docstring.)"""
-    estimator, rng = KinematicEstimator(), np.random.default_rng(12)
+    estimator, rng = KinematicEstimator(L_H), np.random.default_rng(12)
     pivot_about_ground(estimator, rng)
     moved = R_O + np.array([0.0, 0.005])
     outcomes = []
@@ -192,7 +191,7 @@ def test_a_ground_reported_sliding_with_a_sticking_hand_moves_r_o_not_s_h(theta)
     """The ground "may slide" (a report the kinematics do not act on) and really slides 10 mm along
     world x, the hand sticks: at θ = 0 that is a motion along ``e_t``, kinematically a hand slide,
     but the sticking-hand report decides — ``r_o`` follows, ``s_h`` stays."""
-    estimator, rng = KinematicEstimator(), np.random.default_rng(13)
+    estimator, rng = KinematicEstimator(L_H), np.random.default_rng(13)
     pivot_about_ground(estimator, rng)
     params = KinematicsParams()
     for x_o in np.linspace(R_O[0], R_O[0] + 0.01, 200):
@@ -208,7 +207,7 @@ def test_a_ground_reported_sliding_with_a_sticking_hand_moves_r_o_not_s_h(theta)
 def test_a_ground_slip_while_the_hand_slides_too_gives_both_from_the_tilted_hand():
     """Both contacts "may slide" and both do (the object 8 mm along x, the hand 6 mm along the
     face) with the hand tilted 0.35 rad: eq. 20 sees the ground's share, eq. 21 the rest."""
-    estimator, rng = KinematicEstimator(), np.random.default_rng(14)
+    estimator, rng = KinematicEstimator(L_H), np.random.default_rng(14)
     pivot_about_ground(estimator, rng)
     theta = 0.35
     for fraction in np.linspace(0.0, 1.0, 400):

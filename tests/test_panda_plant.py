@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from ccopt import geometry
+from ccopt.hand import Hand
 from ccopt.objects import make_object
-from ccopt.plant.base import Plant, PlantParams, StartConfig
+from ccopt.plant.base import Plant, StartConfig
 from ccopt.plant.mujoco_panda import HAND_BODY, HAND_SITE, PandaParams, PandaPlant
 from panda_model.impedance import joint_stiffness, planar_stiffness
 from panda_model.model import hand_jacobian, hand_placement, task_jacobian
@@ -18,9 +19,9 @@ from panda_model.model import hand_jacobian, hand_placement, task_jacobian
 SQUARE = make_object("square")
 
 
-def lifted_plant(params: PlantParams | None = None, lift=(0.0, 0.08, 0.0), settle: float = 1.5):
+def lifted_plant(hand: Hand | None = None, lift=(0.0, 0.08, 0.0), settle: float = 1.5):
     """A plant whose hand target is moved by ``lift`` off its start (into free space), then settled."""
-    plant = PandaPlant(SQUARE, params, StartConfig(settle_time=0.0))
+    plant = PandaPlant(SQUARE, None, StartConfig(settle_time=0.0), hand)
     plant.set_target(plant.hand_pose() + np.asarray(lift))
     plant.step(round(settle / plant.timestep))
     return plant
@@ -63,7 +64,8 @@ def test_start_configuration_presses_the_object_like_the_protocol_says():
     assert (truth.hand_mode, truth.ground_mode, truth.hand_geometry) == (0, 0, 0)
     # At rest the hand wrench the wrist F/T reports is the impedance law w = K (x_tar − x_h).
     pose = plant.hand_pose()
-    impedance = geometry.wrench_world_to_hand(pose[2], np.multiply(plant.params.K, plant.target() - pose))
+    stiffness = plant.hand.stiffness
+    impedance = geometry.wrench_world_to_hand(pose[2], np.multiply(stiffness, plant.target() - pose))
     np.testing.assert_allclose(plant.hand_wrench(), impedance, atol=0.02)
     assert plant.hand_wrench()[0] > 0.7 * StartConfig().normal_force
 
@@ -97,20 +99,18 @@ def test_free_space_hold_within_half_a_millimetre():
 @pytest.mark.parametrize("axis", [0, 1])
 def test_ten_newton_push_deflects_the_hand_by_force_over_stiffness(axis):
     plant = lifted_plant()
-    params = plant.params
     rest = plant.hand_pose()
     push = np.zeros(3)
     push[axis] = 10.0
     deflection = hold_wrench(plant, push, duration=1.2) - rest
-    assert deflection[axis] == pytest.approx(10.0 / params.K[axis], rel=0.05)
+    assert deflection[axis] == pytest.approx(10.0 / plant.hand.stiffness[axis], rel=0.05)
     # The wrist F/T sees the hand hold the push: the hand exerts −push on whatever pushes it.
     felt = geometry.wrench_world_to_hand(plant.hand_pose()[2], -push)
     np.testing.assert_allclose(plant.hand_wrench(), felt, atol=0.1)
 
 
 def test_predicted_planar_stiffness_matches_pushes_in_mujoco():
-    params = PlantParams(K=(2500.0, 1500.0, 60.0))
-    plant = lifted_plant(params, lift=(0.03, 0.08, -0.35), settle=2.0)
+    plant = lifted_plant(Hand(stiffness=(2500.0, 1500.0, 60.0)), lift=(0.03, 0.08, -0.35), settle=2.0)
     rest = plant.hand_pose()
     pushes = np.diag([8.0, 8.0, 0.4])
     deflections = np.column_stack([hold_wrench(plant, push, duration=1.2) - rest for push in pushes])

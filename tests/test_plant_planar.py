@@ -15,26 +15,31 @@ import numpy as np
 import pytest
 
 from ccopt import geometry
+from ccopt.hand import Hand
 from ccopt.objects import PAPER_OBJECT_NAMES, PlanarObject, make_object
 from ccopt.plant import scene
 from ccopt.plant.base import Plant, PlantParams, StartConfig
 from ccopt.plant.mujoco_planar import PlanarPlant
-from ccopt.plant.truth import lowest_vertex
 
 F_N = 8.0
 """Normal force the hand presses with in the motion tests, N."""
 
 
+HAND = Hand(half_length=0.05)
+"""The plant tests' hand: 10 cm long (DESIGN.md §6), as on the faces these tests press."""
+
+
 def flat_rectangle(mu_hand: float, mu_ground: float, s_h: float = -0.09, f_n: float = 10.0) -> PlanarPlant:
     """Paper rectangle lying on a long face, the hand on top (θ_o = 0) pressing with ``f_n``."""
     obj = make_object("paper-rectangle", mu_hand=mu_hand, mu_ground=mu_ground)
-    return PlanarPlant(obj, start=StartConfig(hand_face=0, theta_o=0.0, s_h=s_h, normal_force=f_n))
+    return PlanarPlant(obj, hand=HAND, start=StartConfig(hand_face=0, theta_o=0.0, s_h=s_h, normal_force=f_n))
 
 
 def push_with(plant: PlanarPlant, wrench_hand: np.ndarray) -> None:
     """One step with the hand exerting ``wrench_hand`` (hand frame) through a damped impedance."""
     pose = plant.hand_pose()
-    plant.set_target(pose + geometry.wrench_hand_to_world(pose[2], wrench_hand) / np.array(plant.params.K))
+    offset = geometry.wrench_hand_to_world(pose[2], wrench_hand) / np.array(plant.hand.stiffness)
+    plant.set_target(pose + offset)
     plant.step()
 
 
@@ -101,7 +106,7 @@ def centred_start(obj: PlanarObject, face: int, theta_o: float) -> StartConfig:
     normal = obj.face_normal(face)
     angle = theta_o + 0.5 * math.pi - math.atan2(normal[1], normal[0])
     world = geometry.transform_points(obj.vertices, (0.0, 0.0, angle))
-    world -= world[lowest_vertex(world)]
+    world -= world[geometry.lowest_vertex(world)]
     middle = 0.5 * (world[face] + world[(face + 1) % obj.n_faces])
     s_h = float(-middle @ geometry.hand_tangent(theta_o))
     return StartConfig(hand_face=face, theta_o=theta_o, s_h=s_h, normal_force=F_N)
@@ -132,13 +137,13 @@ def test_open_loop_pivot_sticks_at_both_contacts(name: str) -> None:
     obj = make_object(name)
     face, start_deg = PIVOTS[name]
     theta0, turn, duration = math.radians(start_deg), math.radians(25.0), 1.0
-    plant = PlanarPlant(obj, start=centred_start(obj, face, theta0))
+    plant = PlanarPlant(obj, hand=HAND, start=centred_start(obj, face, theta0))
     truth = plant.truth()
     r_o, s_h, d = truth.r_o.copy(), truth.s_h, truth.d
-    pivot = lowest_vertex(geometry.transform_points(obj.vertices, plant.object_pose()))
+    pivot = geometry.lowest_vertex(geometry.transform_points(obj.vertices, plant.object_pose()))
     centroid0 = plant.object_pose()[:2] - r_o
-    l_eff = min(plant.params.l_h, 0.5 * obj.face_length(face))
-    stiffness = np.array(plant.params.K)
+    l_eff = min(plant.hand.half_length, 0.5 * obj.face_length(face))
+    stiffness = np.array(plant.hand.stiffness)
     hand0, vertex0 = hand_on_face(plant, face), vertex_world(plant, pivot)
 
     ramp_steps, move_steps, hold_steps = 200, round(duration / plant.timestep), 300
@@ -172,7 +177,7 @@ def test_open_loop_pivot_sticks_at_both_contacts(name: str) -> None:
 
 def slide(plant: PlanarPlant, velocity: np.ndarray, seconds: float = 1.2, settle: float = 0.3):
     """Move the target at ``velocity`` (world) while pressing with ``F_N``; sample after ``settle``."""
-    press = np.array([0.0, -F_N / plant.params.K[1], 0.0])
+    press = np.array([0.0, -F_N / plant.hand.stiffness[1], 0.0])
     start = plant.hand_pose() + press
     samples = []
     for k in range(round(seconds / plant.timestep)):
@@ -216,7 +221,7 @@ def test_hand_pivots_on_a_face_edge_under_a_large_torque() -> None:
     truth = plant.truth()
     # θ_o − θ_h < 0: the hand turned CCW and rests on its −e_t end, so τ = +l_h f_n.
     assert truth.hand_geometry == -1
-    assert plant.hand_wrench()[2] == pytest.approx(plant.params.l_h * plant.hand_wrench()[0], rel=0.05)
+    assert plant.hand_wrench()[2] == pytest.approx(plant.hand.half_length * plant.hand_wrench()[0], rel=0.05)
 
 
 # --- statics, start configuration, pushes, API -------------------------------------------------
@@ -224,10 +229,10 @@ def test_hand_pivots_on_a_face_edge_under_a_large_torque() -> None:
 
 def test_hand_wrench_balances_the_impedance_and_the_ground_carries_the_rest() -> None:
     obj = make_object("paper-pentagon")
-    plant = PlanarPlant(obj, start=centred_start(obj, 0, math.radians(-8.0)))
+    plant = PlanarPlant(obj, hand=HAND, start=centred_start(obj, 0, math.radians(-8.0)))
     plant.step(500)
     world = plant.hand_wrench_world()
-    impedance = np.array(plant.params.K) * (plant.target() - plant.hand_pose())
+    impedance = np.array(plant.hand.stiffness) * (plant.target() - plant.hand_pose())
     np.testing.assert_allclose(world, impedance, atol=0.02)
     np.testing.assert_allclose(
         plant.hand_wrench(), geometry.wrench_world_to_hand(plant.hand_pose()[2], world)
@@ -258,8 +263,8 @@ def test_hand_wrench_agrees_with_mujoco_contact_forces() -> None:
 def test_start_configuration_is_reached() -> None:
     obj = make_object("paper-hexagon")
     start = StartConfig(hand_face=2, theta_o=math.radians(20.0), s_h=-0.03, normal_force=5.0, x_o=0.1)
-    truth = PlanarPlant(obj, start=start).truth()
-    plant = PlanarPlant(obj, start=start)
+    truth = PlanarPlant(obj, hand=HAND, start=start).truth()
+    plant = PlanarPlant(obj, hand=HAND, start=start)
     truth = plant.truth()
     # The start target only presses: the object settles slightly towards its statics.
     assert truth.theta_o == pytest.approx(start.theta_o, abs=math.radians(0.5))
@@ -296,12 +301,7 @@ def test_planar_plant_implements_the_plant_protocol() -> None:
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [
-        ({"l_h": 0.0}, "l_h must be positive, got 0.0"),
-        ({"K": (2000.0, -1.0, 60.0)}, r"K\[1\] must be positive, got -1.0"),
-        ({"K": (2000.0, 60.0)}, "K must be three"),
         ({"timestep": 0.1}, "timestep must be at most 0.01 s, got 0.1"),
-        ({"damping_ratio": -0.5}, "damping_ratio must be non-negative, got -0.5"),
-        ({"hand_mass": math.nan}, "hand_mass must be finite, got nan"),
         ({"contact_timeconst": 0.001}, "contact_timeconst must be at least twice"),
         ({"solimp": (0.9, 0.5, 0.01)}, "solimp must satisfy"),
     ],
@@ -311,12 +311,28 @@ def test_bad_plant_parameters_raise_clear_errors(kwargs: dict, message: str) -> 
         PlantParams(**kwargs)
 
 
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"half_length": 0.0}, "half_length must be positive, got 0.0"),
+        ({"stiffness": (2000.0, -1.0, 60.0)}, "stiffness must be positive"),
+        ({"stiffness": (2000.0, 60.0)}, "stiffness must be 3 numbers"),
+        ({"damping_ratio": -0.5}, "damping_ratio must be non-negative, got -0.5"),
+        ({"mass": math.nan}, r"hand mass must be finite, got nan"),
+        ({"force_limits": (10.0, 5.0)}, "force_limits must satisfy"),
+    ],
+)
+def test_bad_hand_parameters_raise_clear_errors(kwargs: dict, message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        Hand(**kwargs)
+
+
 def test_bad_start_and_commands_raise_clear_errors() -> None:
     obj = make_object("paper-square")
     with pytest.raises(ValueError, match=r"face must be in \[0, 3\].*got 7"):
-        PlanarPlant(obj, start=StartConfig(hand_face=7))
+        PlanarPlant(obj, hand=HAND, start=StartConfig(hand_face=7))
     with pytest.raises(ValueError, match=r"s_h = 0\.2 m puts the hand centre off face 0"):
-        PlanarPlant(obj, start=StartConfig(s_h=0.2))
+        PlanarPlant(obj, hand=HAND, start=StartConfig(s_h=0.2))
     with pytest.raises(ValueError, match=r"normal_force must be positive, got -1\.0"):
         StartConfig(normal_force=-1.0)
     with pytest.raises(TypeError, match="hand_face must be an integer"):

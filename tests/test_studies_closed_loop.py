@@ -7,11 +7,11 @@ import pytest
 
 from ccopt import closed_loop, metrics
 from ccopt.closed_loop import LoopParams
+from ccopt.metrics import failure_causes, recovery_time
 from ccopt.objects import make_object
 from ccopt.schedule import load_schedule
 from studies import paper, perturbation, robustness
-from studies.perturbation import Push, recovery_time
-from studies.robustness import failure_causes
+from studies.perturbation import Push
 
 SMALL = ["--schedule", "smoke", "--workers", "1", "--no-progress"]
 
@@ -70,11 +70,11 @@ def test_misses_name_each_threshold():
         "ratio_realised_commanded": {"median": 1.2},
         "unintended_slips": 0,
     }
-    assert paper.misses(summary) == ["s_h_err", "s_g_err", "ratio"]
+    assert metrics.misses(summary) == ["s_h_err", "s_g_err", "ratio"]
     summary.update(
         s_h_err_mm={"median": 1.0}, s_g_err_mm={"median": 3.0}, ratio_realised_commanded={"median": 1.0}
     )
-    assert paper.misses(summary) == []
+    assert metrics.misses(summary) == []
 
 
 # --- robustness -----------------------------------------------------------------------------------
@@ -131,10 +131,10 @@ def slip(contact):
         ),
         ({"infeasible_ticks_share": 0.5, "kinematics_resets": 1}, []),  # succeeded anyway
         (
-            {"completed": False, "steps_done": 1, "infeasible_steps": [1, 7]},
-            ["infeasible step"],
+            {"completed": False, "steps_done": 1, "impossible_steps": [1, 7]},
+            ["impossible step"],
         ),
-        ({"infeasible_steps": [3]}, []),  # an impossible step is no failure if the run succeeded
+        ({"impossible_steps": [3]}, []),  # an impossible step is no failure if the run succeeded
     ],
 )
 def test_failure_causes_from_hand_made_summaries(changes, causes):
@@ -142,8 +142,8 @@ def test_failure_causes_from_hand_made_summaries(changes, causes):
 
 
 def test_estimator_resets_count_valid_to_invalid():
-    assert robustness.kinematics_resets(np.array([0, 1, 1, 0, 0, 1, 0], dtype=bool)) == 2
-    assert robustness.kinematics_resets(np.array([0, 0, 1], dtype=bool)) == 0
+    assert metrics.kinematics_resets(np.array([0, 1, 1, 0, 0, 1, 0], dtype=bool)) == 2
+    assert metrics.kinematics_resets(np.array([0, 0, 1], dtype=bool)) == 0
 
 
 def test_an_object_too_small_for_the_hand_does_not_fit():

@@ -218,13 +218,13 @@ def test_schedule_check_agrees_with_the_simulated_closed_loop():
     decides independently."""
     from ccopt import closed_loop, metrics
     from ccopt.closed_loop import LoopParams
+    from ccopt.experiment import check_schedule
     from ccopt.objects import make_object
     from ccopt.schedule import Schedule, hold, pivot, slide_hand
-    from studies.feasibility import schedule_feasibility
 
     obj = make_object("paper-triangle")
     schedule = Schedule("check", (hold(0.3), pivot(7.2), slide_hand(10.0)))
-    checks = schedule_feasibility(obj, schedule, LoopParams())
+    checks = check_schedule(obj, schedule, LoopParams())
     assert [c.feasible for c in checks] == [True, True, False]
     assert checks[2].on_face and checks[2].margin < 0.0
     result = closed_loop.run(obj, schedule, seed=0)

@@ -14,9 +14,10 @@ import numpy as np
 
 from ccopt import contact, modes
 from ccopt.control.qp import MAX_ROWS, MAX_TERMS, QPInstance
+from ccopt.hand import Hand
 
-DEFAULT_STIFFNESS = np.diag([2000.0, 2000.0, 60.0])
-"""DESIGN.md §5 impedance, N/m, N/m, N·m/rad."""
+DEFAULT_STIFFNESS = Hand().stiffness_in_hand_frame(0.0)
+"""The default hand's impedance in its own frame (DESIGN.md §5), N/m, N/m, N·m/rad."""
 
 
 def random_instance(rng: np.random.Generator, n_rows: int | None = None) -> QPInstance:

@@ -2,11 +2,11 @@
 wrench and pose alone. :class:`Estimator` is the entry point; the modules are its parts."""
 
 from ccopt.estimation.angle_filter import AngleFilter, AngleFilterParams
+from ccopt.estimation.classifier import ModeClassifier, ModeParams
 from ccopt.estimation.estimator import Estimate, Estimator, EstimatorParams, replay
 from ccopt.estimation.friction import HandFrictionEstimator, HandFrictionParams
 from ccopt.estimation.ground_cone import GroundCone, GroundConeEstimator, GroundConeParams
 from ccopt.estimation.kinematics import KinematicEstimate, KinematicEstimator, KinematicsParams
-from ccopt.estimation.mode import ModeClassifier, ModeParams
 from ccopt.estimation.quantile import P2Quantile, P2QuantileBank
 
 __all__ = [

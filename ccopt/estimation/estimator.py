@@ -8,7 +8,7 @@ m/rad) and hand wrench ``(f_n, f_t, τ)`` (hand frame, N and N·m, :mod:`ccopt.g
 2. the generalized friction cone ``N w ≤ b`` in the hand frame (:data:`ccopt.contact.cone_rows`,
    evaluated once per sample through one flat buffer, the same function as
    :func:`ccopt.contact.friction_cone` at a fraction of its call overhead) and its margins ``b − N w``;
-3. the mode classifier (:mod:`.mode`) on those margins: the conservative reported modes, and the
+3. the mode classifier (:mod:`.classifier`) on those margins: the conservative reported modes, and the
    most likely ones (a tighter hand friction margin) for the kinematics;
 4. the kinematic estimator (:mod:`.kinematics`) under the most likely modes, except for ground-slide
    reports the kinematics cannot act on (:func:`kinematic_modes`): the paper's warm start regresses
@@ -37,11 +37,12 @@ from ccopt import contact, geometry
 from ccopt.casadi_eval import BufferedFunction
 from ccopt.contact import N_CONE_ROWS
 from ccopt.estimation.angle_filter import AngleFilter, AngleFilterParams
+from ccopt.estimation.classifier import ModeClassifier, ModeParams
 from ccopt.estimation.friction import HandFrictionEstimator, HandFrictionParams
 from ccopt.estimation.ground_cone import GroundCone, GroundConeEstimator, GroundConeParams
 from ccopt.estimation.kinematics import KinematicEstimator, KinematicsParams
-from ccopt.estimation.mode import ModeClassifier, ModeParams
 from ccopt.estimation.quantile import check_number
+from ccopt.hand import Hand
 from ccopt.modes import ContactConfiguration, ContactMode, HandGeometry
 
 
@@ -72,7 +73,7 @@ class EstimatorParams:
             deviations of the margin's noise at the default sensor noise), not the conservative
             1.5 N. On a plant recording this halved the worst ``s_h``/``s_g`` errors after a ground slide
             (4.7 → 1.1 mm).
-        kinematics: kinematic estimator (its ``half_length`` must equal the friction one).
+        kinematics: kinematic estimator.
         theta_filter: filter of ``θ_o`` while it is the hand's angle (flush hand).
         contact_force: the hand is in contact while ``f_n`` exceeds this (N).
     """
@@ -98,11 +99,6 @@ class EstimatorParams:
             if not isinstance(getattr(self, name), kind):
                 raise TypeError(f"{name} must be a {kind.__name__}, got {getattr(self, name)!r}")
         check_number("contact_force", self.contact_force, low_open=False)
-        if self.friction.half_length != self.kinematics.half_length:
-            raise ValueError(
-                f"friction.half_length ({self.friction.half_length!r}) and kinematics.half_length "
-                f"({self.kinematics.half_length!r}) must be equal: both are the hand's l_h"
-            )
 
 
 @dataclass(frozen=True)
@@ -166,15 +162,26 @@ class Estimate:
 
 
 class Estimator:
-    """The object-agnostic estimator (see the module docstring)."""
+    """The object-agnostic estimator (see the module docstring).
 
-    def __init__(self, params: EstimatorParams | None = None) -> None:
+    Args:
+        hand: the robot's hand (the torque limits and pivot geometry need its length; nothing of
+            the object is known).
+        params: estimator parameters.
+    """
+
+    def __init__(self, hand: Hand | None = None, params: EstimatorParams | None = None) -> None:
+        self.hand = hand if hand is not None else Hand()
+        if not isinstance(self.hand, Hand):
+            raise TypeError(f"hand must be a Hand, got {type(self.hand).__name__} {self.hand!r}")
         self.params = params if params is not None else EstimatorParams()
-        self.friction = HandFrictionEstimator(self.params.friction)
+        if not isinstance(self.params, EstimatorParams):
+            raise TypeError(f"params must be an EstimatorParams, got {type(self.params).__name__}")
+        self.friction = HandFrictionEstimator(self.hand.half_length, self.params.friction)
         self.ground = GroundConeEstimator(self.params.ground)
         self.classifier = ModeClassifier(self.params.modes)
         self.kinematic_classifier = ModeClassifier(self.params.kinematic_modes)
-        self.kinematics = KinematicEstimator(self.params.kinematics)
+        self.kinematics = KinematicEstimator(self.hand.half_length, self.params.kinematics)
         self.theta_filter = AngleFilter(self.params.theta_filter)
         self._cone_input = np.zeros(12)
         self._cone_ground: GroundCone | None = None
@@ -196,8 +203,7 @@ class Estimator:
         in_contact = f_n > self.params.contact_force
         if in_contact:
             self.friction.update(f_n, f_t)
-            force = np.array([f_n * e_n[0] + f_t * e_t[0], f_n * e_n[1] + f_t * e_t[1]])  # world (f_x, f_y)
-            self.ground.update(time, force)
+            self.ground.update(time, geometry.hand_force_to_world(theta_h, f_n, f_t))
         friction, ground = self.friction, self.ground.cone
         cone_rows, cone_bounds, margins = self._cone(theta_h, friction.mu_h, friction.l_h_eff, ground, wrench)
         valid = [friction.valid, friction.valid, True, True, ground.valid, ground.valid]  # order: Row
@@ -332,10 +338,11 @@ def replay(
     times: Iterable[float],
     hand_poses: Iterable[ArrayLike],
     hand_wrenches: Iterable[ArrayLike],
+    hand: Hand | None = None,
     params: EstimatorParams | None = None,
 ) -> list[Estimate]:
-    """Run a fresh :class:`Estimator` over a recording; one :class:`Estimate` per sample."""
-    estimator = Estimator(params)
+    """Run a fresh :class:`Estimator` of ``hand`` over a recording; one :class:`Estimate` per sample."""
+    estimator = Estimator(hand, params)
     return [
         estimator.update(time, pose, wrench)
         for time, pose, wrench in zip(times, hand_poses, hand_wrenches, strict=True)

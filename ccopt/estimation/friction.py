@@ -47,7 +47,6 @@ class HandFrictionParams:
         min_normal_force: samples with ``f_n`` at or below this are ignored (N, > 0).
         level: quantile level of ``μ_meas`` taken as the estimate.
         min_samples: accepted samples before the friction rows count as estimated.
-        half_length: ``l_h``, half the length of the hand's contact face (m).
         torque_margin: ``l_h_eff / l_h`` in ``(0, 1]``.
     """
 
@@ -57,7 +56,6 @@ class HandFrictionParams:
     min_normal_force: float = 3.0
     level: float = 0.99
     min_samples: int = 100
-    half_length: float = 0.05
     torque_margin: float = 0.85
 
     def __post_init__(self) -> None:
@@ -67,14 +65,21 @@ class HandFrictionParams:
         check_number("min_normal_force", self.min_normal_force)
         check_level(self.level)
         check_count("min_samples", self.min_samples)
-        check_number("half_length", self.half_length)
         check_number("torque_margin", self.torque_margin, 0.0, 1.0)
 
 
 class HandFrictionEstimator:
-    """Streaming estimate of ``μ_h`` and the hand torque limit (see the module docstring)."""
+    """Streaming estimate of ``μ_h`` and the hand torque limit (see the module docstring).
 
-    def __init__(self, params: HandFrictionParams | None = None) -> None:
+    Args:
+        half_length: ``l_h``, half the length of the hand's contact face (m; the robot's
+            :class:`~ccopt.hand.Hand`).
+        params: estimator parameters.
+    """
+
+    def __init__(self, half_length: float, params: HandFrictionParams | None = None) -> None:
+        check_number("half_length", half_length)
+        self.half_length = float(half_length)
         self.params = params if params is not None else HandFrictionParams()
         self._quantile = P2Quantile(self.params.level)
         self._mu_h = self.params.mu_prior
@@ -87,7 +92,7 @@ class HandFrictionEstimator:
     @property
     def l_h_eff(self) -> float:
         """Torque limit arm ``margin · l_h`` (m): ``|τ| ≤ l_h_eff f_n``."""
-        return self.params.torque_margin * self.params.half_length
+        return self.params.torque_margin * self.half_length
 
     @property
     def sample_count(self) -> int:

@@ -75,7 +75,6 @@ class KinematicsParams:
     """Parameters of the kinematic estimator.
 
     Attributes:
-        half_length: ``l_h``, half the hand's contact face (m); its ends are the pivots.
         excitation_angle: hand rotation between two regression samples (rad).
         position_noise: assumed standard deviation of each measured coordinate of ``r_h`` (m),
             including the effect of the angle noise.
@@ -92,7 +91,6 @@ class KinematicsParams:
         slip_samples: this many rejected eq. 20 samples in a row reset the estimate.
     """
 
-    half_length: float = 0.05
     excitation_angle: float = math.radians(0.5)
     position_noise: float = 5e-4
     prior_std: float = 1.0
@@ -102,7 +100,6 @@ class KinematicsParams:
     slip_samples: int = 3
 
     def __post_init__(self) -> None:
-        check_number("half_length", self.half_length)
         check_number("excitation_angle", self.excitation_angle, low_open=False)
         check_number("position_noise", self.position_noise)
         check_number("prior_std", self.prior_std)
@@ -145,7 +142,10 @@ class KinematicEstimator:
     faster than NumPy.
     """
 
-    def __init__(self, params: KinematicsParams | None = None) -> None:
+    def __init__(self, half_length: float, params: KinematicsParams | None = None) -> None:
+        check_number("half_length", half_length)
+        self.half_length = float(half_length)
+        """``l_h``, half the hand's contact face (m): its ends are the pivots."""
         self.params = params if params is not None else KinematicsParams()
         self._noise_variance = self.params.position_noise**2
         self._prior_variance = self.params.prior_std**2
@@ -263,7 +263,7 @@ class KinematicEstimator:
             return False
         start = self._theta_o if self._theta_o_valid else float(hand_pose[2])
         r_o = np.array(self._state[X_O : Y_O + 1])
-        solution = pivot_contact(hand_pose, sign, self.params.half_length, self._state[D], r_o, start)
+        solution = pivot_contact(hand_pose, sign, self.half_length, self._state[D], r_o, start)
         if solution is None:
             self._theta_o_valid = False
             return False

@@ -15,6 +15,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ccopt.hand import Hand
 from ccopt.objects import PlanarObject
 from ccopt.plant.truth import Truth
 
@@ -45,16 +46,10 @@ def planar_vector(name: str, value: ArrayLike) -> np.ndarray:
 
 @dataclass(frozen=True)
 class PlantParams:
-    """Physical and numerical parameters of a simulated plant.
+    """Numerical parameters of a simulated plant (the hand's own are in :class:`~ccopt.hand.Hand`).
 
     Attributes:
-        l_h: half-length of the hand's flat contact face, m.
-        K: impedance stiffness ``(k_x, k_y, k_θ)`` in N/m, N/m, N·m/rad, world axes, acting at the
-            hand contact-face centre.
-        damping_ratio: impedance damping as a fraction of critical damping of the free hand.
         timestep: simulation step, s.
-        hand_thickness: extent of the hand box behind its contact face, m.
-        hand_mass: mass of the moving hand, kg (gravity compensated).
         depth: out-of-plane extent of the object prism (the hand is 1.5× deeper), m.
         contact_timeconst: MuJoCo ``solref`` time constant of every contact pair, s.
         solimp: MuJoCo ``solimp`` ``(d_min, d_max, width)`` of every contact pair (width in m).
@@ -70,19 +65,14 @@ class PlantParams:
         ValueError: a field is non-finite or out of range (the message names it).
     """
 
-    l_h: float = 0.05
-    K: tuple[float, float, float] = (2000.0, 2000.0, 60.0)
-    damping_ratio: float = 1.0
     timestep: float = 1e-3
-    hand_thickness: float = 0.02
-    hand_mass: float = 1.0
     depth: float = 0.04
     contact_timeconst: float = 0.005
     solimp: tuple[float, float, float] = (0.5, 0.95, 0.01)
     impratio: float = 1000.0
 
     def __post_init__(self) -> None:
-        for name in ("l_h", "hand_thickness", "hand_mass", "depth", "impratio"):
+        for name in ("depth", "impratio"):
             object.__setattr__(self, name, _positive(name, getattr(self, name)))
         timestep = _positive("timestep", self.timestep)
         if timestep > 0.01:
@@ -95,32 +85,12 @@ class PlantParams:
                 f"got {timeconst!r}"
             )
         object.__setattr__(self, "contact_timeconst", timeconst)
-        ratio = _real("damping_ratio", self.damping_ratio)
-        if ratio < 0.0:
-            raise ValueError(f"damping_ratio must be non-negative, got {ratio!r}")
-        object.__setattr__(self, "damping_ratio", ratio)
-        if isinstance(self.K, str) or np.ndim(self.K) != 1 or len(self.K) != 3:
-            raise ValueError(f"K must be three stiffnesses (k_x, k_y, k_θ), got {self.K!r}")
-        stiffness = tuple(_positive(f"K[{i}]", k) for i, k in enumerate(self.K))
-        object.__setattr__(self, "K", stiffness)
         if isinstance(self.solimp, str) or np.ndim(self.solimp) != 1 or len(self.solimp) != 3:
             raise ValueError(f"solimp must be three numbers (d_min, d_max, width), got {self.solimp!r}")
         d_min, d_max, width = (_real(f"solimp[{i}]", v) for i, v in enumerate(self.solimp))
         if not 0.0 < d_min <= d_max < 1.0 or width <= 0.0:
             raise ValueError(f"solimp must satisfy 0 < d_min <= d_max < 1 and width > 0, got {self.solimp!r}")
         object.__setattr__(self, "solimp", (d_min, d_max, width))
-
-    @property
-    def hand_inertia(self) -> float:
-        """Hand moment of inertia about the contact-face centre (out of plane), kg·m²."""
-        length, thick = 2.0 * self.l_h, self.hand_thickness
-        return self.hand_mass * ((length**2 + thick**2) / 12.0 + 0.25 * thick**2)
-
-    @property
-    def D(self) -> tuple[float, float, float]:
-        """Impedance damping ``(d_x, d_y, d_θ)``, N·s/m, N·s/m, N·m·s/rad, from ``damping_ratio``."""
-        masses = (self.hand_mass, self.hand_mass, self.hand_inertia)
-        return tuple(2.0 * self.damping_ratio * math.sqrt(k * m) for k, m in zip(self.K, masses, strict=True))
 
 
 @dataclass(frozen=True)
@@ -159,15 +129,23 @@ class StartConfig:
         object.__setattr__(self, "settle_time", settle)
 
 
-def plant_inputs(obj: object, params: object, start: object) -> tuple[PlanarObject, PlantParams, StartConfig]:
+def plant_inputs(
+    obj: object, params: object, start: object, hand: object
+) -> tuple[PlanarObject, PlantParams, StartConfig, Hand]:
     """A plant's constructor arguments with defaults filled in; ``TypeError`` naming a wrong one."""
     params = PlantParams() if params is None else params
     start = StartConfig() if start is None else start
-    expected = (("obj", obj, PlanarObject), ("params", params, PlantParams), ("start", start, StartConfig))
+    hand = Hand() if hand is None else hand
+    expected = (
+        ("obj", obj, PlanarObject),
+        ("params", params, PlantParams),
+        ("start", start, StartConfig),
+        ("hand", hand, Hand),
+    )
     for name, value, kind in expected:
         if not isinstance(value, kind):
             raise TypeError(f"{name} must be a {kind.__name__}, got {type(value).__name__} {value!r}")
-    return obj, params, start
+    return obj, params, start, hand
 
 
 @runtime_checkable
@@ -179,6 +157,7 @@ class Plant(Protocol):
     timestep: float
     """Simulation step, s."""
     params: PlantParams
+    hand: Hand
 
     def set_target(self, pose: ArrayLike, velocity: ArrayLike | None = None) -> None:
         """Hand impedance target, world ``(x, y, θ)`` (m, rad), with optional velocity feed-forward."""

@@ -11,14 +11,14 @@ Control, every 1 ms step, from joint positions and velocities only (Pinocchio on
 
 with ``J`` the world-aligned hand Jacobian, ``e`` the 6-D error *target − hand* of the hand frame
 (planar target, plate held in the plane; ``ė`` uses the target velocity as feed-forward), ``K`` the
-planar stiffness ``diag(PlantParams.K)`` plus a stiff out-of-plane block, ``D`` critical for the
+planar stiffness ``diag(Hand.stiffness)`` plus a stiff out-of-plane block, ``D`` critical for the
 operational-space inertia at the start, ``h`` gravity and Coriolis (Pinocchio ``nonLinearEffects``),
 ``N = I − J⁺J`` and ``q₀`` the start configuration. Statically the hand then shows exactly ``K`` in
 the plane (see :mod:`panda_model.impedance`). The hand wrench is the flange F/T reading mapped to
 ``(f_n, f_t, τ)`` by :func:`panda_model.wrench.hand_wrench` (quasi-static: the plate's inertia
 forces are not compensated).
 
-The plate is ``2 l_h`` long, ``1.5 depth`` wide, ``hand_thickness`` thick and weighs ``hand_mass``
+The plate is ``2 l_h`` long, ``1.5 depth`` wide, the hand's ``thickness`` thick and weighs its ``mass``
 (:func:`hand_plate`); the motors keep the URDF effort limits (87 N·m, 12 N·m on joints 5–7).
 With the default mount (base 0.5 m behind the ccopt origin) the hand reaches, with 0.1 rad of
 joint-limit margin, ``θ_h`` in about [−50°, +15°] for ``x_h`` in [−0.1, 0.15] m and ``y_h`` in
@@ -39,12 +39,12 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from ccopt import geometry
+from ccopt.hand import Hand
 from ccopt.objects import PlanarObject
 from ccopt.plant import scene
-from ccopt.plant.base import PlantParams, StartConfig, planar_vector, plant_inputs
-from ccopt.plant.mujoco_planar import start_poses
-from ccopt.plant.truth import Truth, compute_truth
+from ccopt.plant.base import PlantParams, StartConfig, planar_vector
+from ccopt.plant.mujoco_base import HAND_GEOM, MujocoPlant, joint_slice
+from ccopt.plant.placement import start_poses
 from panda_model.hand import HandPlate, Mount
 from panda_model.impedance import OUT_OF_PLANE_STIFFNESS, ImpedanceGains, impedance_gains
 from panda_model.model import TASK_AXES, Panda, hand_rotation, inverse_kinematics, load_panda, planar_pose
@@ -52,13 +52,9 @@ from panda_model.urdf import ARM_JOINTS, FLANGE_LINK, arm_urdf
 from panda_model.wrench import hand_wrench
 
 HAND_BODY = "hand_plate"
-HAND_GEOM = "hand"
 HAND_SITE = "hand_face"
 FT_SITE = "flange_ft"
 FT_SENSORS = ("flange_force", "flange_torque")
-
-CONTACT_FORCE_MIN = 1e-3
-"""Normal force (N) above which a pair counts as in contact."""
 
 
 @dataclass(frozen=True)
@@ -88,13 +84,13 @@ class PandaParams:
                 raise ValueError(f"PandaParams.{name} must be a non-negative number, got {value!r}")
 
 
-def hand_plate(params: PlantParams) -> HandPlate:
-    """The plate of a plant: face ``2 l_h`` long, 1.5× the object depth wide, ``hand_thickness`` thick."""
+def hand_plate(hand: Hand, params: PlantParams) -> HandPlate:
+    """The plate of a hand: face ``2 l_h`` long, 1.5× the object depth wide, the hand's thickness and mass."""
     return HandPlate(
-        half_length=params.l_h,
+        half_length=hand.half_length,
         half_width=0.75 * params.depth,
-        thickness=params.hand_thickness,
-        mass=params.hand_mass,
+        thickness=hand.thickness,
+        mass=hand.mass,
     )
 
 
@@ -149,9 +145,9 @@ def robot_xml(hand: HandPlate, mount: Mount, armature: float) -> tuple[str, str]
     return assets, ET.tostring(base, encoding="unicode")
 
 
-def panda_model_xml(obj: PlanarObject, params: PlantParams, panda: PandaParams) -> str:
+def panda_model_xml(obj: PlanarObject, params: PlantParams, panda: PandaParams, hand: Hand) -> str:
     """The complete MJCF of the Panda plant: arm + plate, object, ground, pairs, motors, F/T sensor."""
-    assets, robot = robot_xml(hand_plate(params), panda.mount, panda.armature)
+    assets, robot = robot_xml(hand_plate(hand, params), panda.mount, panda.armature)
     motors = "".join(f'<motor name="{joint}" joint="{joint}"/>' for joint in ARM_JOINTS)
     return (
         f'<mujoco model="ccopt_panda_{obj.name}">'
@@ -166,21 +162,16 @@ def panda_model_xml(obj: PlanarObject, params: PlantParams, panda: PandaParams) 
     )
 
 
-def _slice(addresses: list[int]) -> slice:
-    """The contiguous slice covering ``addresses`` (consecutive by construction of the model)."""
-    if addresses != list(range(addresses[0], addresses[0] + len(addresses))):
-        raise RuntimeError(f"expected consecutive addresses, got {addresses}")
-    return slice(addresses[0], addresses[0] + len(addresses))
-
-
-class PandaPlant:
+class PandaPlant(MujocoPlant):
     """Panda hand–object–ground simulation (implements :class:`~ccopt.plant.base.Plant`).
 
     Args:
         obj: the object.
-        params: plant parameters (``K`` is the planar hand stiffness, world axes).
+        params: simulation parameters.
         start: start configuration: the arm is put there by inverse kinematics, settles for
             ``start.settle_time`` and then resets its clock to 0.
+        hand: the robot's hand (plate length and body; ``stiffness`` is the planar hand stiffness,
+            world axes).
         panda: Panda-specific settings.
     """
 
@@ -189,37 +180,35 @@ class PandaPlant:
         obj: PlanarObject,
         params: PlantParams | None = None,
         start: StartConfig | None = None,
+        hand: Hand | None = None,
         *,
         panda: PandaParams | None = None,
     ) -> None:
-        self.obj, self.params, self.start = plant_inputs(obj, params, start)
+        super().__init__(obj, params, start, hand)
+        if panda is not None and not isinstance(panda, PandaParams):
+            raise TypeError(f"panda must be a PandaParams, got {type(panda).__name__} {panda!r}")
         self.panda_params = panda or PandaParams()
-        self.hand = hand_plate(self.params)
-        self.panda: Panda = load_panda(self.hand, self.panda_params.mount, self.panda_params.armature)
-        object_pose, start_hand, target = start_poses(obj, self.start, self.params)
+        self.plate = hand_plate(self.hand, self.params)
+        self.panda: Panda = load_panda(self.plate, self.panda_params.mount, self.panda_params.armature)
+        object_pose, start_hand, target = start_poses(self.obj, self.start, self.hand)
         q_start = inverse_kinematics(self.panda, start_hand)
 
-        self._model = mujoco.MjModel.from_xml_string(panda_model_xml(obj, self.params, self.panda_params))
-        self._data = mujoco.MjData(self._model)
+        self._load(panda_model_xml(self.obj, self.params, self.panda_params, self.hand))
         m = self._model
-        self._arm_q = _slice([int(m.jnt_qposadr[m.joint(j).id]) for j in ARM_JOINTS])
-        self._arm_v = _slice([int(m.jnt_dofadr[m.joint(j).id]) for j in ARM_JOINTS])
-        self._obj_qpos = _slice([int(m.jnt_qposadr[m.joint(j).id]) for j in scene.OBJECT_JOINTS])
-        self._obj_dof = _slice([int(m.jnt_dofadr[m.joint(j).id]) for j in scene.OBJECT_JOINTS])
-        self._ft = _slice([int(m.sensor_adr[m.sensor(s).id]) + i for s in FT_SENSORS for i in range(3)])
+        self._arm_q = joint_slice(m, ARM_JOINTS)
+        self._arm_v = joint_slice(m, ARM_JOINTS, velocity=True)
+        force, torque = (int(m.sensor_adr[m.sensor(name).id]) for name in FT_SENSORS)
+        if torque != force + 3:
+            raise RuntimeError(f"expected consecutive F/T sensor addresses, got {force}, {torque}")
+        self._ft = slice(force, force + 6)
         self._hand_site = m.site(HAND_SITE).id
-        self._hand_geom = m.geom(HAND_GEOM).id
-        self._object_geom = m.geom(scene.OBJECT_GEOM).id
-        self._ground_geom = m.geom(scene.GROUND_GEOM).id
-        self._object_body = m.body(scene.OBJECT_BODY).id
-        self._push_end: float | None = None
 
         self.gains: ImpedanceGains = impedance_gains(
             self.panda,
             q_start,
-            np.diag(self.params.K),
+            np.diag(self.hand.stiffness),
             self.panda_params.out_of_plane,
-            self.params.damping_ratio,
+            self.hand.damping_ratio,
             self.panda_params.null_stiffness,
             self.panda_params.null_damping,
         )
@@ -246,28 +235,6 @@ class PandaPlant:
         self.step(round(self.start.settle_time / self.timestep))
         self._data.time = 0.0
 
-    # --- simulator access (read only: do not mutate) ---------------------------------------------
-
-    @property
-    def model(self) -> mujoco.MjModel:
-        """The MuJoCo model (for tests and benchmarks; do not mutate)."""
-        return self._model
-
-    @property
-    def data(self) -> mujoco.MjData:
-        """The MuJoCo data (for tests and benchmarks; do not mutate)."""
-        return self._data
-
-    @property
-    def time(self) -> float:
-        """Simulated time since the end of settling, s."""
-        return float(self._data.time)
-
-    @property
-    def timestep(self) -> float:
-        """Simulation step, s."""
-        return float(self._model.opt.timestep)
-
     # --- commands --------------------------------------------------------------------------------
 
     def set_target(self, pose: ArrayLike, velocity: ArrayLike | None = None) -> None:
@@ -288,25 +255,10 @@ class PandaPlant:
         """Current impedance target, world ``(x, y, θ)``."""
         return self._target.copy()
 
-    def push_object(self, force: ArrayLike, duration: float) -> None:
-        """Apply world force ``(f_x, f_y)`` (N) at the object's centroid for ``duration`` s from now."""
-        push = np.asarray(force, dtype=float)
-        if push.shape != (2,) or not np.all(np.isfinite(push)):
-            raise ValueError(f"force must be 2 finite numbers (f_x, f_y), got {force!r}")
-        if not math.isfinite(duration) or duration < 0.0:
-            raise ValueError(f"duration must be a non-negative number of s, got {duration!r}")
-        self._data.xfrc_applied[self._object_body, [0, 2]] = push
-        self._push_end = self.time + duration
-
-    def step(self, n_steps: int = 1) -> None:
-        """Advance by ``n_steps`` 1-kHz control-and-physics steps (ending a push when it is over)."""
-        if isinstance(n_steps, bool) or not isinstance(n_steps, int | np.integer) or n_steps < 0:
-            raise ValueError(f"n_steps must be a non-negative integer, got {n_steps!r}")
+    def _advance(self, n_steps: int) -> None:
+        """``n_steps`` 1-kHz control-and-physics steps."""
         model, data = self._model, self._data
-        for _ in range(int(n_steps)):
-            if self._push_end is not None and data.time >= self._push_end - 1e-9:
-                data.xfrc_applied[self._object_body] = 0.0
-                self._push_end = None
+        for _ in range(n_steps):
             self._control()
             mujoco.mj_step(model, data)
         # mj_step leaves positions and velocities of bodies at the state before its last update:
@@ -356,22 +308,14 @@ class PandaPlant:
         )
         return TASK_AXES[:3] @ np.concatenate((velocity[3:], velocity[:3]))
 
-    def object_pose(self) -> np.ndarray:
-        """True world ``(x, y, φ)`` of the object's centroid frame."""
-        return self._data.qpos[self._obj_qpos].copy()
-
-    def object_velocity(self) -> np.ndarray:
-        """True world ``(ẋ, ẏ, φ̇)`` of the object's centroid frame."""
-        return self._data.qvel[self._obj_dof].copy()
-
     def flange_wrench(self) -> np.ndarray:
         """Wrist F/T reading: wrench of the flange on the plate, flange frame, about the flange (N, N·m)."""
         return self._data.sensordata[self._ft].copy()
 
     def hand_wrench(self) -> np.ndarray:
         """Hand wrench ``(f_n, f_t, τ)`` on the object, from the F/T reading (gravity-compensated)."""
-        flange_rotation = self._hand_rotation @ self.hand.rotation.T
-        return hand_wrench(self._data.sensordata[self._ft], flange_rotation, self.hand)
+        flange_rotation = self._hand_rotation @ self.plate.rotation.T
+        return hand_wrench(self._data.sensordata[self._ft], flange_rotation, self.plate)
 
     def hand_wrench_world(self) -> np.ndarray:
         """True world wrench ``(f_x, f_y, τ)`` of the hand on the object from the contact forces,
@@ -381,19 +325,3 @@ class PandaPlant:
     def ground_wrench(self) -> np.ndarray:
         """True world wrench ``(f_x, f_y, τ)`` of the ground on the object, ``τ`` about its centroid."""
         return scene.pair_wrench(self._data, self._ground_geom, self._object_geom, self.object_pose()[:2])
-
-    def truth(self) -> Truth:
-        """Ground truth of the contact configuration (see :mod:`ccopt.plant.truth`)."""
-        pose = self.hand_pose()
-        hand_force = geometry.wrench_world_to_hand(pose[2], self.hand_wrench_world())[0]
-        return compute_truth(
-            time=self.time,
-            obj=self.obj,
-            hand_face=self.start.hand_face,
-            object_pose=self.object_pose(),
-            object_velocity=self.object_velocity(),
-            hand_pose=pose,
-            hand_velocity=self.hand_velocity(),
-            in_contact_hand=hand_force > CONTACT_FORCE_MIN,
-            in_contact_ground=self.ground_wrench()[1] > CONTACT_FORCE_MIN,
-        )

@@ -31,10 +31,6 @@ SLIDE_SPEED = 1e-3
 PIVOT_ANGLE = math.radians(0.5)
 """Hand pivoting threshold on ``|θ_o − θ_h|``, rad: smaller is reported as flush."""
 
-LOWEST_TIE = 1e-4
-"""Vertices within this height (m) of the lowest one tie; the left-most of them is ``r_o``."""
-
-
 @dataclass(frozen=True)
 class Truth:
     """True contact configuration at one instant.
@@ -78,19 +74,6 @@ def _mode(rate: float, threshold: float) -> int:
     return 0 if abs(rate) <= threshold else int(math.copysign(1.0, rate))
 
 
-def lowest_vertex(world_vertices: np.ndarray) -> int:
-    """Index of the ground-contact vertex: the lowest, ties (:data:`LOWEST_TIE`) to the left-most."""
-    heights = world_vertices[:, 1]
-    candidates = np.flatnonzero(heights <= heights.min() + LOWEST_TIE)
-    return int(candidates[np.argmin(world_vertices[candidates, 0])])
-
-
-def face_angle(obj: PlanarObject, face: int, object_angle: float) -> float:
-    """World orientation ``θ`` of ``face`` such that its outward normal is ``−e_n(θ)``, rad."""
-    normal = obj.face_normal(face)
-    return object_angle + math.atan2(normal[1], normal[0]) - 0.5 * math.pi
-
-
 def point_velocity(pose: ArrayLike, velocity: ArrayLike, point: ArrayLike) -> np.ndarray:
     """World velocity of a material ``point`` of a body with ``pose`` and ``velocity`` ``(ẋ, ẏ, ω)``."""
     x, y, _ = np.asarray(pose, dtype=float)
@@ -115,10 +98,10 @@ def compute_truth(
     object_pose = np.asarray(object_pose, dtype=float)
     hand_pose = np.asarray(hand_pose, dtype=float)
     world_vertices = geometry.transform_points(obj.vertices, object_pose)
-    r_o = world_vertices[lowest_vertex(world_vertices)]
+    r_o = world_vertices[geometry.lowest_vertex(world_vertices)]
     s_h, d = geometry.contact_coordinates(hand_pose, r_o)
     theta_h = float(hand_pose[2])
-    raw = face_angle(obj, hand_face, float(object_pose[2]))
+    raw = geometry.face_angle(obj.face_normal(hand_face), float(object_pose[2]))
     theta_o = theta_h + geometry.wrap_angle(raw - theta_h)
     hand_velocity = np.asarray(hand_velocity, dtype=float)
     v_contact = point_velocity(object_pose, object_velocity, hand_pose[:2])

@@ -9,7 +9,7 @@ import pytest
 
 from ccopt import contact
 from ccopt.contact import N_CONE_ROWS, Row
-from ccopt.estimation.mode import ModeClassifier, ModeParams, tight_direction
+from ccopt.estimation.classifier import ModeClassifier, ModeParams, tight_direction
 from ccopt.modes import ContactConfiguration, ContactMode, HandGeometry
 
 MU_H, MU_G, L_H, MASS = 0.5, 0.8, 0.05, 0.3

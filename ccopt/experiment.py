@@ -1,0 +1,115 @@
+"""One scored run: object + schedule + parameters + seed (+ folder) → record, meta and summary.
+
+This is what ``ccopt run``, the paper study and the robustness study all do, with one set of
+metadata keys:
+
+1. the experimenter's check of the schedule on the *true* object (:func:`ccopt.statics.schedule_feasibility`:
+   which steps no controller could do; the estimator and the controller never see it);
+2. the closed loop (:func:`ccopt.closed_loop.run`), recorded to ``folder`` if one is given;
+3. the score against the simulator's truth (:func:`ccopt.metrics.summarize`), with the steps the
+   oracle found impossible (``impossible_steps``) and how often the kinematics were lost
+   (``kinematics_resets``), written to ``summary.json``.
+
+``meta.json`` holds ``object``, ``schedule``, ``seed``, ``params`` (plant, rates, hand, start) and
+``feasibility`` (the oracle's check of every step); the loop adds ``steps`` and ``status``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+from ccopt import closed_loop, metrics, statics
+from ccopt.closed_loop import LoopParams, RunResult
+from ccopt.objects import PlanarObject
+from ccopt.record import load_record, write_summary
+from ccopt.schedule import Schedule
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """A scored run.
+
+    Attributes:
+        result: what the closed loop returned (its samples are empty when recorded to a folder).
+        meta: the run's ``meta.json`` content as written before the run.
+        summary: the run's ``summary.json`` content.
+        feasibility: the oracle's check of every step (:class:`ccopt.statics.StepFeasibility`).
+        folder: the run folder, None for an in-memory run.
+    """
+
+    result: RunResult
+    meta: dict[str, object]
+    summary: dict[str, object]
+    feasibility: tuple[statics.StepFeasibility, ...]
+    folder: Path | None
+
+
+def object_meta(obj: PlanarObject) -> dict[str, object]:
+    """The object as ``meta.json`` stores it (what :mod:`ccopt.plots` rebuilds it from). SI units."""
+    return {
+        "name": obj.name,
+        "vertices": obj.vertices.tolist(),
+        "mass": obj.mass,
+        "mu_hand": obj.mu_hand,
+        "mu_ground": obj.mu_ground,
+    }
+
+
+def run_meta(obj: PlanarObject, schedule: Schedule, seed: int, params: LoopParams) -> dict[str, object]:
+    """``meta.json`` of a run before it starts (the loop adds ``steps`` and ``status``)."""
+    return {
+        "object": object_meta(obj),
+        "schedule": schedule.to_dict(),
+        "seed": seed,
+        "params": {
+            "plant": params.plant,
+            "estimator_hz": params.estimator_hz,
+            "controller_hz": params.controller_hz,
+            "hand": asdict(params.hand),
+            "start": asdict(closed_loop.start_config(obj, params)),
+        },
+    }
+
+
+def check_schedule(
+    obj: PlanarObject, schedule: Schedule, params: LoopParams
+) -> tuple[statics.StepFeasibility, ...]:
+    """The oracle's check of every step of ``schedule`` on the true ``obj`` as ``params`` start it."""
+    start = closed_loop.start_config(obj, params)
+    return statics.schedule_feasibility(obj, schedule.steps, start, params.hand)
+
+
+def run_experiment(
+    obj: PlanarObject,
+    schedule: Schedule,
+    params: LoopParams | None = None,
+    seed: int = 0,
+    folder: str | Path | None = None,
+    on_tick: Callable[[float, int, int], None] | None = None,
+    warn: Callable[[str], None] | None = None,
+) -> Experiment:
+    """Check, run and score ``schedule`` on ``obj`` (see the module docstring).
+
+    ``warn`` receives one line per step the oracle finds impossible, before the run starts;
+    ``on_tick`` is passed to :func:`ccopt.closed_loop.run`. Ctrl-C ends the run early: the result
+    says ``interrupted`` and the summary scores what was run.
+    """
+    params = params or LoopParams()
+    checks = check_schedule(obj, schedule, params)
+    if warn is not None:
+        for check in checks:
+            if not check.feasible:
+                warn(f"not physically possible for this object: {check.describe()}")
+    meta = run_meta(obj, schedule, seed, params)
+    meta["feasibility"] = [asdict(check) for check in checks]
+    result = closed_loop.run(obj, schedule, params, seed=seed, out=folder, meta=meta, on_tick=on_tick)
+    data = load_record(folder).data if folder is not None else result.samples
+    steps = [asdict(step) for step in result.steps]
+    summary = metrics.summarize(data, steps, len(schedule.steps), result.sim_time, result.wall_time)
+    summary["impossible_steps"] = statics.impossible_steps(checks)
+    summary["kinematics_resets"] = metrics.kinematics_resets(data["est_kinematics_valid"]) if data else 0
+    if folder is not None:
+        write_summary(folder, summary)
+    return Experiment(result, meta, summary, checks, Path(folder) if folder is not None else None)

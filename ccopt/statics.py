@@ -1,0 +1,383 @@
+"""What the object allows: the statics of a flush hand and a point ground contact, per commanded motion.
+
+With the hand flush on a face and the object on one vertex, a hand wrench ``w = (f_n, f_t, τ)`` (hand
+frame, :mod:`ccopt.geometry`) holds the object in static equilibrium (paper eq. 1) exactly when the
+ground force ``f_g = −f_h − f_grav`` lies in the ground friction cone and the moments about the
+ground contact ``r_o`` balance::
+
+    τ − d f_t + s_h f_n + M(θ_o) = 0,          M(θ_o) = a cos θ_o + b sin θ_o,
+
+where ``M`` is the moment of the object's weight about ``r_o`` (CCW positive; body-fixed centre of
+mass, so ``M`` is linear in ``cos θ_o, sin θ_o``: :class:`GravityMoment`). The ground rows of the
+generalized friction cone (:data:`ccopt.contact.cone_rows`) are written on the hand force with the
+weight inside their bounds, so the ground force never appears.
+
+For one configuration ``(θ_o, s_h)`` and one commanded motion (:class:`ccopt.modes.Motion`), a linear
+program over ``(f_n, f_t, τ, t)``
+
+* keeps every cone row the motion keeps (:func:`ccopt.modes.kept_rows`) with a margin ``≥ t``
+  (torque rows divided by ``l_h`` so that every margin is a force, N);
+* puts the contact at its limit in the commanded direction: the removed row's LHS is exactly 0
+  (e.g. ``μ_h f_n + f_t = 0`` for ``SLIDE_HAND_POS``);
+* balances the moments (above) and presses with ``f_min ≤ f_n ≤ f_max``;
+
+and maximises ``t``, the **margin**: the motion is possible, with every other contact keeping its
+mode, where the margin is at least :data:`MIN_MARGIN`. The best wrench includes the normal force: a
+hand slide, for one, needs ``|±d μ_h − s_h − M/f_n| ≤ l_h``, which gravity's moment helps only at low
+normal force. ``HOLD`` and ``PIVOT`` keep every row and share their answer.
+
+The statics take **parameters**, not an object (:class:`ObjectStatics`): the true ones — the
+experimenter's oracle (:meth:`ObjectStatics.of_model`, :func:`true_statics`, :func:`schedule_feasibility`)
+— or the estimated ones (``μ̂_h``, the estimated ground rows, ``d̂``, an estimated ``M``) for the
+controller and the planner. The LP is written once in CasADi (:func:`build_statics_lp`, the contact
+model's own rows and equilibrium) and solved by DAQP (:data:`LP_PROXIMAL_WEIGHT`), about 60 µs a
+solve; a cvxpy + Clarabel twin checks it in the tests.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from ccopt import contact, geometry, modes
+from ccopt.casadi_eval import BufferedFunction
+from ccopt.contact import N_CONE_ROWS, Row
+from ccopt.hand import Hand
+from ccopt.modes import Motion
+from ccopt.objects import PlanarObject
+from ccopt.plant.base import StartConfig
+from ccopt.plant.placement import face_s_h_range, start_poses
+from ccopt.schedule import Step
+
+MIN_MARGIN = 0.3
+"""Margin (N) every kept row needs for a configuration to count as held, by default."""
+
+_TORQUE_ROWS = (Row.HAND_PIVOT_POS, Row.HAND_PIVOT_NEG)
+_N_PARAMETERS = 12  # θ_o, s_h, d, M, μ_h, l_h, vec(A) (4, column-major), b (2)
+_N_ROWS = N_CONE_ROWS + 1  # cone rows, moment balance
+_BIG = 1e6
+"""Bound on ``|f_t|``, ``|τ|`` and ``|t|`` of the LP (N, N·m): far beyond any wrench considered."""
+LP_PROXIMAL_WEIGHT = 1e-6
+"""DAQP's proximal-point weight, which lets its QP method solve an LP (no Hessian). The answers agree
+with Clarabel's to ~2e-6 N over random configurations (a test holds the two against each other).
+HiGHS, the other LP solver CasADi ships, is not used: SciPy bundles another HiGHS, and the two in one
+process crash."""
+_FEASIBILITY_TOLERANCE = 1e-6
+"""A returned solution that misses an equality or a force limit by more than this (N, N·m) means the
+LP was infeasible."""
+
+
+@dataclass(frozen=True)
+class GravityMoment:
+    """``M(θ_o) = a cos θ_o + b sin θ_o``: the moment (N·m, CCW) of the object's weight about the ground
+    contact, for a centre of mass fixed in the object.
+
+    Attributes:
+        cos_coefficient: ``a``, N·m; ``−m g`` times the centre of mass's offset along the hand face.
+        sin_coefficient: ``b``, N·m; ``m g`` times its offset from the ground contact towards the face.
+    """
+
+    cos_coefficient: float
+    sin_coefficient: float
+
+    def __call__(self, theta_o: float) -> float:
+        """The moment at face angle ``θ_o`` (rad), N·m."""
+        return self.cos_coefficient * math.cos(theta_o) + self.sin_coefficient * math.sin(theta_o)
+
+    @classmethod
+    def of_centre_of_mass(cls, mass: float, com_along: float, com_height: float) -> GravityMoment:
+        """The moment of ``mass`` kg centred at ``r_o + com_along e_t(θ_o) − com_height e_n(θ_o)`` (m)."""
+        weight = mass * geometry.GRAVITY
+        return cls(-weight * com_along, weight * com_height)
+
+
+@dataclass(frozen=True)
+class ObjectStatics:
+    """What the statics need to know of the object, true or estimated (SI units).
+
+    Attributes:
+        mu_h: hand friction coefficient.
+        ground_rows: ``A`` (2×2), the ground friction rows ``A f_h ≤ b`` on the world hand force,
+            rows ``GROUND_SLIDE_POS, GROUND_SLIDE_NEG`` (:data:`ccopt.contact.ground_rows_world`).
+        ground_bounds: ``b`` (2,), N (the weight is inside them).
+        d: distance from the ground contact to the hand face along ``e_n``, m.
+        gravity: the weight's moment about the ground contact.
+    """
+
+    mu_h: float
+    ground_rows: np.ndarray
+    ground_bounds: np.ndarray
+    d: float
+    gravity: GravityMoment
+
+    def __post_init__(self) -> None:
+        rows = np.array(self.ground_rows, dtype=float)
+        bounds = np.array(self.ground_bounds, dtype=float)
+        if rows.shape != (2, 2) or bounds.shape != (2,):
+            raise ValueError(f"ground rows must be 2×2 with 2 bounds, got {rows.shape} and {bounds.shape}")
+        values = (self.mu_h, self.d, self.gravity.cos_coefficient, self.gravity.sin_coefficient)
+        finite = np.all(np.isfinite(rows)) and np.all(np.isfinite(bounds)) and all(map(math.isfinite, values))
+        if not finite:
+            raise ValueError("object statics must be finite")
+        if self.mu_h < 0.0:
+            raise ValueError(f"mu_h must be non-negative, got {self.mu_h!r}")
+        rows.flags.writeable = False
+        bounds.flags.writeable = False
+        object.__setattr__(self, "ground_rows", rows)
+        object.__setattr__(self, "ground_bounds", bounds)
+
+    @classmethod
+    def of_model(
+        cls, mu_h: float, mu_g: float, mass: float, d: float, com_along: float, com_height: float
+    ) -> ObjectStatics:
+        """The statics of a known object on a horizontal ground (friction, mass, centre of mass)."""
+        rows, bounds = contact.model_ground_rows(mu_g, mass)
+        return cls(mu_h, rows, bounds, d, GravityMoment.of_centre_of_mass(mass, com_along, com_height))
+
+
+@dataclass(frozen=True)
+class StaticsResult:
+    """The best wrench for one motion at one configuration.
+
+    Attributes:
+        margin: the largest smallest kept-row margin (N); ``-inf`` where no wrench satisfies the
+            equilibrium, the force limits and the motion's sliding limit at all.
+        wrench: the hand wrench ``(f_n, f_t, τ)`` achieving it (N, N, N·m), None where none exists.
+    """
+
+    margin: float
+    wrench: np.ndarray | None
+
+    def feasible(self, min_margin: float = MIN_MARGIN) -> bool:
+        """Whether the motion is possible with at least ``min_margin`` (N) on every kept row."""
+        return self.margin >= min_margin
+
+
+def build_statics_lp() -> ca.Function:
+    """``(p, keep, lba, uba, lbx, ubx) → (x, rows)``: the LP of the module docstring, solved by DAQP.
+
+    ``p = (θ_o, s_h, d, M, μ_h, l_h, vec(A), b)``; ``x = (f_n, f_t, τ, t)``. The rows are the six cone
+    rows ``s_j (b_j − n_jᵀw) − k_j t`` (``s_j = 1/l_h`` on torque rows, ``k_j = 1`` on kept rows) and
+    the moment balance; ``lba``/``uba`` (7) select kept (``[0, ∞)``), removed (``[0, 0]``) and ignored
+    rows, and the moment balance is ``[0, 0]``; ``f_n`` is bounded by the force limits through ``lbx``.
+    """
+    p = ca.SX.sym("p", _N_PARAMETERS)
+    theta, s_h, d, moment, mu_h, l_h = (p[i] for i in range(6))
+    ground_a, ground_b = ca.reshape(p[6:10], 2, 2), p[10:12]
+    keep = ca.SX.sym("keep", N_CONE_ROWS)
+    x = ca.SX.sym("x", 4)
+    wrench, margin = x[:3], x[3]
+    rows, bounds = contact.cone_rows(theta, mu_h, l_h, ground_a, ground_b)
+    scale = ca.vertcat(1, 1, 1 / l_h, 1 / l_h, 1, 1)
+    slack = scale * (bounds - rows @ wrench) - keep * margin
+    hand_pose = contact.hand_pose_kinematics(theta, s_h, 0.0, d, 0.0)
+    zero = ca.SX.zeros(2)
+    balance = contact.equilibrium_residual(hand_pose, wrench, zero, zero, zero, zero)[2] + moment
+    constraints = ca.vertcat(slack, balance)
+    matrices = ca.Function(
+        "statics_lp_matrices",
+        [p, keep],
+        [ca.jacobian(constraints, x), ca.substitute(constraints, x, ca.SX.zeros(4))],
+    )
+    lp = ca.conic(
+        "statics_lp_daqp",
+        "daqp",
+        {"a": ca.Sparsity.dense(_N_ROWS, 4)},
+        {"error_on_fail": False, "daqp": {"eps_prox": LP_PROXIMAL_WEIGHT}},
+    )
+    p_in, keep_in = ca.MX.sym("p", _N_PARAMETERS), ca.MX.sym("keep", N_CONE_ROWS)
+    lba, uba = ca.MX.sym("lba", _N_ROWS), ca.MX.sym("uba", _N_ROWS)
+    lbx, ubx = ca.MX.sym("lbx", 4), ca.MX.sym("ubx", 4)
+    a, offset = matrices(p_in, keep_in)
+    objective = ca.DM([0.0, 0.0, 0.0, -1.0])  # maximise t
+    solution = lp(g=objective, a=ca.densify(a), lba=lba - offset, uba=uba - offset, lbx=lbx, ubx=ubx)
+    residual = a @ solution["x"] + offset
+    return ca.Function(
+        "statics_lp",
+        [p_in, keep_in, lba, uba, lbx, ubx],
+        [solution["x"], residual],
+        ["p", "keep", "lba", "uba", "lbx", "ubx"],
+        ["x", "rows"],
+    )
+
+
+@functools.cache
+def _solver() -> BufferedFunction:
+    """The LP, built on first use (each thread evaluates it through its own buffers)."""
+    return BufferedFunction(build_statics_lp())
+
+
+def _row_bounds(motion: Motion) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(keep, lba, uba)`` of the LP's rows for ``motion``."""
+    kept = modes.kept_rows(motion)
+    removed = np.zeros(N_CONE_ROWS, dtype=bool)
+    removed[list(modes.REMOVED_ROWS[motion])] = True
+    lower = np.where(kept | removed, 0.0, -np.inf)
+    upper = np.where(removed, 0.0, np.inf)
+    return kept.astype(float), np.append(lower, 0.0), np.append(upper, 0.0)
+
+
+_BOUNDS = {motion: _row_bounds(motion) for motion in Motion}
+
+
+def parameters(statics: ObjectStatics, theta_o: float, s_h: float, l_h: float) -> np.ndarray:
+    """The LP's parameter vector ``p`` (see :func:`build_statics_lp`)."""
+    return np.concatenate(
+        [
+            [theta_o, s_h, statics.d, statics.gravity(theta_o), statics.mu_h, l_h],
+            statics.ground_rows.ravel(order="F"),
+            statics.ground_bounds,
+        ]
+    )
+
+
+def best_wrench(
+    statics: ObjectStatics,
+    theta_o: float,
+    s_h: float,
+    motion: Motion | str,
+    l_h: float,
+    force_limits: tuple[float, float],
+) -> StaticsResult:
+    """The largest margin (N) of ``motion`` at ``(θ_o, s_h)`` (rad, m) and the hand wrench achieving it.
+
+    ``l_h`` is the torque rows' lever (m; the hand's half-length, or its estimate's effective one)
+    and ``force_limits`` the normal force's ``(f_min, f_max)`` (N).
+    """
+    motion = Motion(motion)
+    keep, lba, uba = _BOUNDS[motion]
+    f_min, f_max = force_limits
+    lbx = np.array([f_min, -_BIG, -_BIG, -_BIG])
+    ubx = np.array([f_max, _BIG, _BIG, _BIG])
+    x, rows = _solver()(parameters(statics, theta_o, s_h, l_h), keep, lba, uba, lbx, ubx)
+    if not _satisfied(x, rows, lba, uba, lbx, ubx):
+        return StaticsResult(-math.inf, None)
+    return StaticsResult(float(x[3]), np.array(x[:3]))
+
+
+def _satisfied(*arrays: np.ndarray) -> bool:
+    """Whether the LP's answer ``x`` and rows meet their bounds: else the LP was infeasible."""
+    x, rows, lba, uba, lbx, ubx = arrays
+    tolerance = _FEASIBILITY_TOLERANCE
+    return bool(
+        np.all(np.isfinite(x))
+        and np.all(rows >= lba - tolerance)
+        and np.all(rows <= uba + tolerance)
+        and np.all(x >= lbx - tolerance)
+        and np.all(x <= ubx + tolerance)
+    )
+
+
+# --- the experimenter's oracle: a known object as a run starts it ---------------------------------
+
+
+@dataclass(frozen=True)
+class TrueConfiguration:
+    """A known object as a run starts it: its statics, its start ``(θ_o, s_h)`` and the range of
+    ``s_h`` over which the whole hand stays on the face (rad, m)."""
+
+    statics: ObjectStatics
+    theta_o: float
+    s_h: float
+    s_h_range: tuple[float, float]
+
+
+def true_statics(obj: PlanarObject, start: StartConfig, hand: Hand) -> TrueConfiguration:
+    """The true statics of ``obj`` started at ``start`` with ``hand`` (the experimenter's oracle: the
+    estimator and the controller never see this)."""
+    object_pose, hand_pose, _ = start_poses(obj, start, hand)
+    r_o = np.array([start.x_o, 0.0])
+    _, d = geometry.contact_coordinates(hand_pose, r_o)
+    com = object_pose[:2] - r_o
+    statics = ObjectStatics.of_model(
+        obj.mu_hand,
+        obj.mu_ground,
+        obj.mass,
+        d,
+        com_along=float(com @ geometry.hand_tangent(start.theta_o)),
+        com_height=float(-(com @ geometry.hand_normal(start.theta_o))),
+    )
+    low, high = face_s_h_range(obj, start)
+    s_h_range = (low + hand.half_length, high - hand.half_length)
+    return TrueConfiguration(statics, start.theta_o, start.s_h, s_h_range)
+
+
+@dataclass(frozen=True)
+class StepFeasibility:
+    """Whether one schedule step is physically possible at its nominal configuration.
+
+    The nominal configuration is where the step starts and ends if every earlier step did exactly what
+    it commanded: ``θ_o`` moved by the pivots, ``s_h`` by the hand slides (``d`` and the centre of mass
+    are fixed in the face frame). Angles in rad, lengths in m, margins in N (see :func:`best_wrench`).
+
+    Attributes:
+        index: position of the step in the schedule.
+        kind: the step's kind (``pivot``, ``slide_hand``, ``slide_ground``, ``hold``).
+        delta: its increment (rad or m).
+        theta_o: nominal ``θ_o`` at the start and at the end of the step.
+        s_h: nominal ``s_h`` at the start and at the end of the step.
+        on_face: the whole hand stays on the face over the step.
+        margin: the smaller LP margin of the step's two ends.
+        feasible: ``on_face`` and ``margin ≥ min_margin``.
+    """
+
+    index: int
+    kind: str
+    delta: float
+    theta_o: tuple[float, float]
+    s_h: tuple[float, float]
+    on_face: bool
+    margin: float
+    feasible: bool
+
+    def describe(self) -> str:
+        """One line in degrees and millimetres, e.g. for a warning."""
+        unit, scale = ("deg", math.degrees(1.0)) if self.kind == "pivot" else ("mm", 1e3)
+        why = "the hand leaves the face" if not self.on_face else f"LP margin {self.margin:.2f} N"
+        return (
+            f"step {self.index} ({self.kind} {self.delta * scale:+.1f} {unit}) at θ_o "
+            f"{math.degrees(self.theta_o[0]):.1f}→{math.degrees(self.theta_o[1]):.1f} deg, s_h "
+            f"{1e3 * self.s_h[0]:.1f}→{1e3 * self.s_h[1]:.1f} mm: {why}"
+        )
+
+
+def schedule_feasibility(
+    obj: PlanarObject, steps: Iterable[Step], start: StartConfig, hand: Hand, min_margin: float = MIN_MARGIN
+) -> tuple[StepFeasibility, ...]:
+    """Check every step of a schedule (its ``steps``) on the known ``obj``, started at ``start`` with
+    ``hand``.
+
+    This is the experimenter's check, not the controller's: it uses the true object (polygon, mass,
+    friction), which ccopt's estimator and controller never see. A step that is infeasible here
+    cannot be done by any controller with a flush hand and a point ground contact; a step that is
+    feasible may still fail (the reduced model ignores dynamics, and the object may roll onto
+    another vertex at large angles).
+    """
+    truth = true_statics(obj, start, hand)
+    low, high = truth.s_h_range
+    theta, s_h = truth.theta_o, truth.s_h
+    checks = []
+    for index, step in enumerate(steps):
+        end_theta = theta + (step.delta if step.kind == "pivot" else 0.0)
+        end_s_h = s_h + (step.delta if step.kind == "slide_hand" else 0.0)
+        on_face = all(low - 1e-9 <= s <= high + 1e-9 for s in (s_h, end_s_h))
+        margin = min(
+            best_wrench(truth.statics, t, s, step.motion, hand.half_length, hand.force_limits).margin
+            for t, s in ((theta, s_h), (end_theta, end_s_h))
+        )
+        feasible = on_face and margin >= min_margin
+        ends = ((theta, end_theta), (s_h, end_s_h))
+        checks.append(StepFeasibility(index, step.kind, step.delta, *ends, on_face, margin, feasible))
+        theta, s_h = end_theta, end_s_h
+    return tuple(checks)
+
+
+def impossible_steps(checks: tuple[StepFeasibility, ...]) -> list[int]:
+    """Indices of the steps that :func:`schedule_feasibility` finds impossible."""
+    return [check.index for check in checks if not check.feasible]
+
