@@ -17,7 +17,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ccopt import contact, geometry
-from ccopt.cliutil import OneLineParser, print_table, writable_json_path, write_json
+from ccopt.cliutil import benchmark_parser, print_table, write_json
 from ccopt.estimation import Estimator
 
 RATE = 1000.0
@@ -94,10 +94,7 @@ def _key(phase: str) -> str:
 
 
 def main(argv: Sequence[str] | None = None) -> None:
-    parser = OneLineParser(prog="python -m benchmarks.estimator_speed", description=__doc__.split("\n")[0])
-    parser.add_argument("--quick", action="store_true", help="2000 samples instead of 20000")
-    parser.add_argument("--json", type=writable_json_path, metavar="PATH", help="write the figures here")
-    parser.add_argument("--seed", type=int, default=0, help="noise seed")
+    parser = benchmark_parser("estimator_speed", __doc__, "2000 samples instead of 20000", seed="noise seed")
     args = parser.parse_args(argv)
     figures = run(2000 if args.quick else 20000, args.seed)
     rows = [

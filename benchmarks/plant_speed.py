@@ -20,7 +20,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ccopt import geometry
-from ccopt.cliutil import OneLineParser, print_table, writable_json_path, write_json
+from ccopt.cliutil import benchmark_parser, print_table, write_json
 from ccopt.objects import make_object
 from ccopt.plant.base import Plant, StartConfig
 from ccopt.plant.mujoco_planar import PlanarPlant
@@ -106,9 +106,7 @@ def run(seconds: float) -> tuple[dict[str, float | str | None], list[tuple[str, 
 
 
 def main(argv: Sequence[str] | None = None) -> None:
-    parser = OneLineParser(prog="python -m benchmarks.plant_speed", description=__doc__.split("\n")[0])
-    parser.add_argument("--quick", action="store_true", help="2 simulated seconds per plant instead of 10")
-    parser.add_argument("--json", type=writable_json_path, metavar="PATH", help="write the figures here")
+    parser = benchmark_parser("plant_speed", __doc__, "2 simulated seconds per plant instead of 10")
     args = parser.parse_args(argv)
     figures, rows = run(2.0 if args.quick else 10.0)
     print("Plant speed: sensors + 1 kHz target callback, one core (real-time factor = sim s / wall s)")

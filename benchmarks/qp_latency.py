@@ -20,7 +20,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from ccopt.casadi_eval import BufferedFunction
-from ccopt.cliutil import OneLineParser, print_table, writable_json_path, write_json
+from ccopt.cliutil import benchmark_parser, print_table, write_json
 from ccopt.control import qp
 from ccopt.control.instances import random_instances
 
@@ -116,10 +116,8 @@ def failures_cell(figures: dict[str, float | int], name: str) -> str:
 
 
 def main(argv: Sequence[str] | None = None) -> None:
-    parser = OneLineParser(prog="python -m benchmarks.qp_latency", description=__doc__.split("\n")[0])
-    parser.add_argument("--quick", action="store_true", help="300 instances instead of 3000")
-    parser.add_argument("--json", type=writable_json_path, metavar="PATH", help="write the figures here")
-    parser.add_argument("--seed", type=int, default=0, help="instance generator seed")
+    quick = "300 instances instead of 3000"
+    parser = benchmark_parser("qp_latency", __doc__, quick, seed="instance generator seed")
     args = parser.parse_args(argv)
     figures = run(300 if args.quick else 3000, args.seed)
     rows = [

@@ -12,7 +12,6 @@ naming the bad value and exit status 2; Ctrl-C during a run keeps the record wri
 from __future__ import annotations
 
 import argparse
-import importlib
 import runpy
 import sys
 from collections.abc import Sequence
@@ -20,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ccopt import objects, record
+from ccopt import __version__, objects, record
 from ccopt.cliutil import OneLineParser, fail, print_table
 from ccopt.objects import PlanarObject
 from ccopt.schedule import load_schedule
@@ -161,17 +160,18 @@ def _command_bench(args: argparse.Namespace, prog: str) -> int:
 
 
 def _command_study(args: argparse.Namespace, prog: str) -> int:
-    from studies.runner import study_modules
-
-    modules = study_modules()
-    if args.name not in modules:
-        fail(prog, f"unknown study {args.name!r}; expected one of: {', '.join(modules)}")
-    module = importlib.import_module(modules[args.name])
-    return int(module.main(args.rest) or 0)
+    """Hand over to ``python -m studies`` (the library does not depend on its studies)."""
+    sys.argv = ["studies", args.name, *args.rest]
+    try:
+        runpy.run_module("studies", run_name="__main__")
+    except SystemExit as done:
+        return done.code if isinstance(done.code, int) else (0 if done.code is None else 1)
+    return 0
 
 
 def make_parser() -> OneLineParser:
     parser = OneLineParser(prog="ccopt", description="Manipulate unknown objects through contact.")
+    parser.add_argument("--version", action="version", version=f"ccopt {__version__}")
     commands = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
     _run_parser(commands)
     plot = commands.add_parser("plot", help="(re)draw the figures of a run folder")

@@ -36,6 +36,17 @@ def writable_json_path(value: str) -> Path:
     return path
 
 
+def benchmark_parser(name: str, doc: str, quick: str, seed: str | None = None) -> OneLineParser:
+    """The parser every benchmark shares: ``--quick`` (``quick`` says what it shrinks), ``--json PATH``
+    and, with a ``seed`` help text, ``--seed``."""
+    parser = OneLineParser(prog=f"python -m benchmarks.{name}", description=doc.split("\n")[0])
+    parser.add_argument("--quick", action="store_true", help=quick)
+    parser.add_argument("--json", type=writable_json_path, metavar="PATH", help="write the figures here")
+    if seed is not None:
+        parser.add_argument("--seed", type=int, default=0, help=seed)
+    return parser
+
+
 def write_json(path: Path, figures: dict[str, object]) -> None:
     """Write ``figures`` as pretty JSON to ``path``."""
     path.write_text(json.dumps(figures, indent=2, sort_keys=True) + "\n")

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from ccopt import geometry
+from ccopt import geometry, validation
 from ccopt.control.controller import Command, ControlInput, Controller, ControllerParams
 from ccopt.estimation.estimator import Estimate, Estimator, EstimatorParams
 from ccopt.hand import Hand
@@ -85,21 +85,13 @@ class LoopParams:
             ("controller_params", ControllerParams),
             ("estimator_params", EstimatorParams),
         )
-        for name, kind in parts:
-            if not isinstance(getattr(self, name), kind):
-                value = getattr(self, name)
-                raise TypeError(f"{name} must be a {kind.__name__}, got {type(value).__name__} {value!r}")
+        validation.check_types((name, getattr(self, name), kind) for name, kind in parts)
         top = 1.0 / self.plant_params.timestep
         for name in ("estimator_hz", "controller_hz"):
             rate = getattr(self, name)
             if not (np.isfinite(rate) and 0.0 < rate <= top):
                 raise ValueError(f"{name} must be in (0, {top:g}] Hz, got {rate!r}")
-        f_min, f_max = self.hand.force_limits
-        if not f_min < self.controller_params.normal_force < f_max:
-            raise ValueError(
-                f"controller normal_force {self.controller_params.normal_force} N must lie inside the "
-                f"hand's force limits {self.hand.force_limits}"
-            )
+        self.controller_params.check_hand(self.hand)
 
     def ticks(self, rate: float) -> int:
         """Plant steps per period of a loop running at ``rate`` Hz (at least 1)."""
@@ -154,18 +146,16 @@ def start_config(obj: PlanarObject, params: LoopParams) -> StartConfig:
     return params.start
 
 
+_FROM_ESTIMATE = ("wrench", "cone_rows", "cone_bounds", "row_valid", "mu_h", "s_h", "d")
+"""The fields a :class:`ControlInput` takes from the :class:`Estimate` as they are."""
+
+
 def control_input(estimate: Estimate, hand_pose: np.ndarray, coordinates: np.ndarray) -> ControlInput:
     """What the controller reads from an estimate, the measured hand pose and the progress source."""
     return ControlInput(
-        wrench=estimate.wrench,
-        cone_rows=estimate.cone_rows,
-        cone_bounds=estimate.cone_bounds,
-        row_valid=estimate.row_valid,
-        mu_h=estimate.mu_h,
+        **{name: getattr(estimate, name) for name in _FROM_ESTIMATE},
         l_h=estimate.torque_lever,
         hand_angle=float(hand_pose[2]),
-        s_h=estimate.s_h,
-        d=estimate.d,
         kinematics_valid=kinematics_usable(estimate),
         coordinates=coordinates,
     )

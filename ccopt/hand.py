@@ -13,26 +13,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from numbers import Real
 
 import numpy as np
 
-from ccopt import geometry
-
-
-def _number(name: str, value: object) -> float:
-    if isinstance(value, bool) or not isinstance(value, Real):
-        raise TypeError(f"hand {name} must be a real number, got {type(value).__name__} {value!r}")
-    number = float(value)
-    if not math.isfinite(number):
-        raise ValueError(f"hand {name} must be finite, got {number!r}")
-    return number
-
-
-def _numbers(name: str, value: object, count: int) -> tuple[float, ...]:
-    if isinstance(value, str) or np.ndim(value) != 1 or len(value) != count:
-        raise ValueError(f"hand {name} must be {count} numbers, got {value!r}")
-    return tuple(_number(f"{name}[{i}]", v) for i, v in enumerate(value))
+from ccopt import geometry, validation
 
 
 @dataclass(frozen=True)
@@ -63,19 +47,16 @@ class Hand:
 
     def __post_init__(self) -> None:
         for name in ("half_length", "thickness", "mass"):
-            value = _number(name, getattr(self, name))
-            if value <= 0.0:
-                raise ValueError(f"hand {name} must be positive, got {value!r}")
-            object.__setattr__(self, name, value)
-        stiffness = _numbers("stiffness", self.stiffness, 3)
+            object.__setattr__(self, name, validation.positive(f"hand {name}", getattr(self, name)))
+        stiffness = validation.reals("hand stiffness", self.stiffness, 3)
         if min(stiffness) <= 0.0:
             raise ValueError(f"hand stiffness must be positive, got {self.stiffness!r}")
         object.__setattr__(self, "stiffness", stiffness)
-        ratio = _number("damping_ratio", self.damping_ratio)
+        ratio = validation.real("hand damping_ratio", self.damping_ratio)
         if ratio < 0.0:
             raise ValueError(f"hand damping_ratio must be non-negative, got {ratio!r}")
         object.__setattr__(self, "damping_ratio", ratio)
-        f_min, f_max = _numbers("force_limits", self.force_limits, 2)
+        f_min, f_max = validation.reals("hand force_limits", self.force_limits, 2)
         if not 0.0 <= f_min < f_max:
             raise ValueError(f"hand force_limits must satisfy 0 ≤ f_min < f_max, got {self.force_limits!r}")
         object.__setattr__(self, "force_limits", (f_min, f_max))

@@ -28,7 +28,6 @@ from __future__ import annotations
 import argparse
 import csv
 import itertools
-import math
 import sys
 from collections.abc import Sequence
 from dataclasses import dataclass, fields
@@ -44,70 +43,6 @@ from studies import runner
 MOTIONS: tuple[Motion, ...] = tuple(Motion)
 
 
-@dataclass(frozen=True)
-class FeasibilityParams:
-    """One configuration of the reduced model, and what counts as holding it. SI units, hand frame.
-
-    Attributes:
-        mu_hand: hand/object friction coefficient ``μ_h``.
-        mu_ground: object/ground friction coefficient ``μ_g``.
-        mass: object mass, kg.
-        d: distance from the ground contact to the hand face along ``e_n``, m.
-        theta_o: orientation of the hand face, rad (hand flush: ``θ_h = θ_o``).
-        s_h: position of the hand centre along the face, ``(r_o − r_h)·e_t``, m.
-        com_along: centre of mass along the face (``e_t``) from the ground contact, m.
-        com_height: centre of mass from the ground contact towards the face (``−e_n``), m.
-        l_h: half-length of the hand, m (torque rows ``|τ| ≤ l_h f_n``).
-        f_min: smallest normal force the hand may press with, N.
-        f_max: largest normal force, N.
-        min_margin: margin (N) every kept row must have for the configuration to count as held.
-    """
-
-    mu_hand: float = 0.5
-    mu_ground: float = 0.8
-    mass: float = 0.195
-    d: float = 0.116
-    theta_o: float = 0.0
-    s_h: float = 0.0
-    com_along: float = 0.0
-    com_height: float = 0.077
-    l_h: float = 0.05
-    f_min: float = 3.0
-    f_max: float = 25.0
-    min_margin: float = 0.3
-
-    def __post_init__(self) -> None:
-        for field in fields(self):
-            if not math.isfinite(getattr(self, field.name)):
-                raise ValueError(f"{field.name} must be finite, got {getattr(self, field.name)!r}")
-        for name in ("mu_hand", "mu_ground", "mass", "l_h"):
-            if getattr(self, name) <= 0.0:
-                raise ValueError(f"{name} must be positive, got {getattr(self, name)!r}")
-        if not 0.0 <= self.f_min <= self.f_max:
-            raise ValueError(f"need 0 ≤ f_min ≤ f_max, got {self.f_min}, {self.f_max}")
-
-
-# --- one grid point ------------------------------------------------------------------------------
-
-
-def best_wrench(params: FeasibilityParams, motion: Motion) -> tuple[float, np.ndarray | None]:
-    """The largest margin ``t`` (N) of ``motion`` at ``params`` and the hand wrench ``(f_n, f_t, τ)``
-    achieving it (:func:`ccopt.statics.best_wrench`); ``(-inf, None)`` where none exists."""
-    object_statics = statics.ObjectStatics.of_model(
-        params.mu_hand, params.mu_ground, params.mass, params.d, params.com_along, params.com_height
-    )
-    result = statics.best_wrench(
-        object_statics, params.theta_o, params.s_h, motion, params.l_h, (params.f_min, params.f_max)
-    )
-    return result.margin, result.wrench
-
-
-def is_feasible(params: FeasibilityParams, motion: Motion | str) -> tuple[bool, float]:
-    """``(feasible, margin)``: can a hand wrench hold ``params`` while allowing ``motion``, by how much."""
-    margin, _ = best_wrench(params, Motion(motion))
-    return margin >= params.min_margin, margin
-
-
 # --- trials ---------------------------------------------------------------------------------------
 
 
@@ -116,6 +51,19 @@ class FeasibilityChunk:
     """One trial: the ``μ_h × θ_o`` grid (and every motion) for one set of the other parameters.
 
     Angles in rad, lengths in m, forces in N. Deterministic: no seed.
+
+    Attributes:
+        mu_hand: the hand friction coefficients ``μ_h`` of the grid.
+        theta_o: the orientations of the hand face of the grid, rad (hand flush: ``θ_h = θ_o``).
+        mu_ground: object/ground friction coefficient ``μ_g``.
+        mass: object mass, kg.
+        d: distance from the ground contact to the hand face along ``e_n``, m.
+        s_h: position of the hand centre along the face, ``(r_o − r_h)·e_t``, m.
+        com_along: centre of mass along the face (``e_t``) from the ground contact, m.
+        com_height: centre of mass from the ground contact towards the face (``−e_n``), m.
+        l_h: half-length of the hand, m (torque rows ``|τ| ≤ l_h f_n``).
+        force_limits: the normal force's ``(f_min, f_max)``, N.
+        min_margin: margin (N) every kept row must have for the configuration to count as held.
     """
 
     mu_hand: tuple[float, ...]
@@ -127,33 +75,34 @@ class FeasibilityChunk:
     com_along: float
     com_height: float
     l_h: float
-    f_min: float
-    f_max: float
+    force_limits: tuple[float, float]
     min_margin: float
 
-    def params(self, mu_hand: float, theta_o: float) -> FeasibilityParams:
-        shared = {f.name: getattr(self, f.name) for f in fields(self) if f.name not in ("mu_hand", "theta_o")}
-        return FeasibilityParams(mu_hand=mu_hand, theta_o=theta_o, **shared)
+    def margin(self, mu_hand: float, theta_o: float, motion: Motion) -> float:
+        """The statics LP's margin (N) of ``motion`` at one grid point (:func:`ccopt.statics.best_wrench`)."""
+        known = statics.ObjectStatics.of_model(
+            mu_hand, self.mu_ground, self.mass, self.d, self.com_along, self.com_height
+        )
+        return statics.best_wrench(known, theta_o, self.s_h, motion, self.l_h, self.force_limits).margin
 
 
 def feasibility_trial(chunk: FeasibilityChunk) -> dict:
     """Margins over ``motion × μ_h × θ_o`` (C order), flattened; ``None`` where nothing exists."""
     margins = [
-        best_wrench(chunk.params(mu, theta), motion)[0]
+        chunk.margin(mu, theta, motion)
         for motion, mu, theta in itertools.product(MOTIONS, chunk.mu_hand, chunk.theta_o)
     ]
     feasible = [m >= chunk.min_margin for m in margins]
     return {"margin": margins, "n_points": len(margins), "n_feasible": int(sum(feasible))}
 
 
-def make_chunks(grid: dict[str, tuple[float, ...]], base: FeasibilityParams) -> list[FeasibilityChunk]:
-    """One chunk per combination of the ``mu_ground, mass, d, s_h`` values in ``grid``."""
-    fixed = {f.name: getattr(base, f.name) for f in fields(FeasibilityParams)}
+def make_chunks(grid: dict[str, tuple[float, ...]], fixed: dict[str, object]) -> list[FeasibilityChunk]:
+    """One chunk per combination of the ``mu_ground, mass, d, s_h`` values in ``grid``; ``fixed`` holds
+    the other fields."""
     chunks = []
     for mu_g, mass, d, s_h in itertools.product(grid["mu_ground"], grid["mass"], grid["d"], grid["s_h"]):
         values = {**fixed, "mu_ground": mu_g, "mass": mass, "d": d, "s_h": s_h}
-        values.update(mu_hand=grid["mu_hand"], theta_o=grid["theta_o"])
-        chunks.append(FeasibilityChunk(**values))
+        chunks.append(FeasibilityChunk(mu_hand=grid["mu_hand"], theta_o=grid["theta_o"], **values))
     return chunks
 
 
@@ -168,10 +117,10 @@ def margin_grid(chunk: FeasibilityChunk, result: dict) -> np.ndarray:
 
 def write_points(path: Path, chunks: Sequence[FeasibilityChunk], results: Sequence[dict]) -> None:
     """One CSV row per configuration and motion: the parameters, ``feasible`` (0/1) and ``margin``."""
-    names = [f.name for f in fields(FeasibilityParams)]
+    names = [f.name for f in fields(FeasibilityChunk) if f.name != "force_limits"]
     with open(path, "w", newline="") as stream:
         writer = csv.writer(stream)
-        writer.writerow([*names, "motion", "feasible", "margin"])
+        writer.writerow([*names, "f_min", "f_max", "motion", "feasible", "margin"])
         for chunk, result in zip(chunks, results, strict=True):
             if "error" in result:
                 continue
@@ -179,10 +128,11 @@ def write_points(path: Path, chunks: Sequence[FeasibilityChunk], results: Sequen
             for (i, motion), (j, mu), (k, theta) in itertools.product(
                 enumerate(MOTIONS), enumerate(chunk.mu_hand), enumerate(chunk.theta_o)
             ):
-                params = chunk.params(mu, theta)
+                point = {**{n: getattr(chunk, n) for n in names}, "mu_hand": mu, "theta_o": theta}
                 margin = grid[i, j, k]
                 feasible = int(bool(margin >= chunk.min_margin))
-                writer.writerow([*(getattr(params, n) for n in names), motion.value, feasible, margin])
+                limits = chunk.force_limits
+                writer.writerow([*(point[n] for n in names), *limits, motion.value, feasible, margin])
 
 
 def heat_map(path: Path, chunk: FeasibilityChunk, result: dict) -> None:
@@ -210,7 +160,7 @@ def heat_map(path: Path, chunk: FeasibilityChunk, result: dict) -> None:
     figure.colorbar(image, ax=axes, label=f"margin (N); feasible ≥ {chunk.min_margin:g}")
     figure.suptitle(
         f"μ_g={chunk.mu_ground:g}  m={chunk.mass:g} kg  d={chunk.d * 1e3:g} mm  s_h={chunk.s_h * 1e3:g} mm  "
-        f"f_n∈[{chunk.f_min:g}, {chunk.f_max:g}] N"
+        f"f_n∈[{chunk.force_limits[0]:g}, {chunk.force_limits[1]:g}] N"
     )
     figure.savefig(path, dpi=110)
 
@@ -290,29 +240,28 @@ def make_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _base_params(args: argparse.Namespace, prog: str) -> FeasibilityParams:
+def _fixed(args: argparse.Namespace, prog: str) -> dict[str, object]:
+    """The chunk fields that do not vary over the grid, checked (one line and exit 2 on a bad value)."""
     for flag, values in (("--mu-hand", args.mu_hand), ("--mu-ground", args.mu_ground), ("--mass", args.mass)):
         if min(values) <= 0.0:
             fail(prog, f"{flag} values must be positive, got {min(values):g}")
-    if len(args.force_limits) != 2:
-        fail(prog, f"--force-limits needs two values f_min,f_max, got {len(args.force_limits)}")
-    try:
-        return FeasibilityParams(
-            com_along=args.com_along * 1e-3,
-            com_height=args.com_height * 1e-3,
-            l_h=args.l_hand * 1e-3,
-            f_min=args.force_limits[0],
-            f_max=args.force_limits[1],
-            min_margin=args.min_margin,
-        )
-    except ValueError as error:
-        fail(prog, str(error))
+    if len(args.force_limits) != 2 or not 0.0 <= args.force_limits[0] <= args.force_limits[1]:
+        fail(prog, f"--force-limits needs two values 0 ≤ f_min ≤ f_max, got {args.force_limits}")
+    if not args.l_hand > 0.0:
+        fail(prog, f"--l-hand must be positive, got {args.l_hand:g}")
+    return {
+        "com_along": args.com_along * 1e-3,
+        "com_height": args.com_height * 1e-3,
+        "l_h": args.l_hand * 1e-3,
+        "force_limits": tuple(args.force_limits),
+        "min_margin": args.min_margin,
+    }
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = make_parser()
     args = parser.parse_args(argv)
-    base = _base_params(args, parser.prog)
+    fixed = _fixed(args, parser.prog)
     grid = {
         "mu_hand": args.mu_hand,
         "theta_o": tuple(float(np.deg2rad(v)) for v in args.theta),
@@ -321,7 +270,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         "d": tuple(v * 1e-3 for v in args.d),
         "s_h": tuple(v * 1e-3 for v in args.s_hand),
     }
-    chunks = make_chunks(grid, base)
+    chunks = make_chunks(grid, fixed)
     options = runner.RunOptions.from_args(args)
     results = runner.run_study(parser.prog, feasibility_trial, chunks, options)
     summary = summarise(chunks, results)

@@ -126,11 +126,10 @@ def control_input(state: RegionState) -> ControlInput:
     rows, bounds = contact.model_friction_cone(
         state.theta_o, state.mu_hand, state.mu_ground, state.l_h, state.mass
     )
+    exact = {"cone_rows": rows, "cone_bounds": bounds, "row_valid": np.ones(contact.N_CONE_ROWS, dtype=bool)}
     return ControlInput(
         wrench=np.asarray(state.wrench, dtype=float),
-        cone_rows=rows,
-        cone_bounds=bounds,
-        row_valid=np.ones(contact.N_CONE_ROWS, dtype=bool),
+        **exact,
         mu_h=state.mu_hand,
         l_h=state.l_h,
         hand_angle=state.theta_o,

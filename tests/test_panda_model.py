@@ -9,28 +9,29 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from panda_model.hand import HandPlate, Mount
-from panda_model.impedance import (
+from panda_model import (
+    ARM_JOINTS,
+    FLANGE_LINK,
+    NEUTRAL,
+    HandPlate,
+    Mount,
+    arm_urdf,
     cartesian_stiffness,
     critical_damping,
-    hand_stiffness_to_world,
-    joint_stiffness,
-    planar_stiffness,
-    task_inertia,
-)
-from panda_model.model import (
-    NEUTRAL,
     hand_jacobian,
     hand_placement,
     hand_pose,
     hand_rotation,
+    hand_stiffness_to_world,
+    hand_wrench,
     inverse_kinematics,
+    joint_stiffness,
     load_panda,
     planar_jacobian,
+    planar_stiffness,
+    task_inertia,
     task_jacobian,
 )
-from panda_model.urdf import ARM_JOINTS, FLANGE_LINK, arm_urdf
-from panda_model.wrench import hand_wrench
 
 
 @pytest.fixture(scope="module")

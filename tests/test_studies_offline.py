@@ -1,123 +1,13 @@
 """Offline studies: feasibility against closed forms, gradient checks, the QP-region figures, the CLI."""
 
-import itertools
 import json
 
 import numpy as np
 import pytest
 
-from ccopt.geometry import GRAVITY
 from ccopt.modes import Motion
 from studies import feasibility, gradients, qp_region
 from studies.__main__ import main as studies_main
-from studies.feasibility import FeasibilityParams, is_feasible
-
-# --- feasibility: closed forms on a flat object (θ_o = 0, s_h = 0, centre of mass above the contact) ----
-#
-# At θ_o = 0 the hand pushes down (e_n = −y, e_t = +x) from r_h = (0, d); the hand force is
-# (f_t, −f_n) in the world and equilibrium about the ground contact gives τ = d f_t. With
-# F = f_h + f_grav = (f_t, −f_n − m g) the six rows (torque rows over l_h) are
-#   μ_h f_n + f_t,  μ_h f_n − f_t,  f_n + d f_t / l_h,  f_n − d f_t / l_h,
-#   μ_g (f_n + m g) − f_t,  μ_g (f_n + m g) + f_t.
-# A motion fixes f_t (its removed row = 0), every kept row becomes affine in f_n, and the margin is
-# max over f_n ∈ [f_min, f_max] of their minimum. Holding picks f_t = 0 (the rows come in ± pairs).
-
-
-def best_of_lines(lines, f_min, f_max):
-    """max over f_n ∈ [f_min, f_max] of min_i (a_i f_n + c_i): at an end or a crossing."""
-    candidates = [f_min, f_max]
-    for (a1, c1), (a2, c2) in itertools.combinations(lines, 2):
-        if a1 != a2:
-            crossing = (c2 - c1) / (a1 - a2)
-            if f_min <= crossing <= f_max:
-                candidates.append(crossing)
-    return max(min(a * f + c for a, c in lines) for f in candidates)
-
-
-def kept_lines(p, f_t_slope, f_t_offset, removed):
-    """The kept rows as (slope, offset) in f_n, for f_t = f_t_slope f_n + f_t_offset."""
-    weight, k = p.mass * GRAVITY, p.d / p.l_h
-    rows = {
-        "hand_pos": (p.mu_hand + f_t_slope, f_t_offset),
-        "hand_neg": (p.mu_hand - f_t_slope, -f_t_offset),
-        "pivot_pos": (1 + k * f_t_slope, k * f_t_offset),
-        "pivot_neg": (1 - k * f_t_slope, -k * f_t_offset),
-        "ground_pos": (p.mu_ground - f_t_slope, p.mu_ground * weight - f_t_offset),
-        "ground_neg": (p.mu_ground + f_t_slope, p.mu_ground * weight + f_t_offset),
-    }
-    return [line for name, line in rows.items() if name != removed]
-
-
-def closed_form_margin(p, motion):
-    weight = p.mass * GRAVITY
-    if motion in (Motion.HOLD, Motion.PIVOT):
-        lines = kept_lines(p, 0.0, 0.0, None)
-    elif motion is Motion.SLIDE_HAND_POS:  # μ_h f_n + f_t = 0
-        lines = kept_lines(p, -p.mu_hand, 0.0, "hand_pos")
-    elif motion is Motion.SLIDE_HAND_NEG:
-        lines = kept_lines(p, p.mu_hand, 0.0, "hand_neg")
-    elif motion is Motion.SLIDE_GROUND_POS:  # μ_g (f_n + m g) − f_t = 0
-        lines = kept_lines(p, p.mu_ground, p.mu_ground * weight, "ground_pos")
-    else:
-        lines = kept_lines(p, -p.mu_ground, -p.mu_ground * weight, "ground_neg")
-    return best_of_lines(lines, p.f_min, p.f_max)
-
-
-FLAT_CASES = [
-    FeasibilityParams(mu_hand=mu_h, mu_ground=mu_g, mass=mass, d=d, com_along=0.0)
-    for mu_h, mu_g, mass, d in itertools.product((0.2, 0.6, 1.1), (0.3, 0.9), (0.2, 1.0), (0.04, 0.116))
-]
-
-
-@pytest.mark.parametrize("motion", list(Motion), ids=lambda m: m.value)
-def test_flat_object_margin_matches_closed_form(motion):
-    for params in FLAT_CASES:
-        expected = closed_form_margin(params, motion)
-        feasible, margin = is_feasible(params, motion)
-        assert margin == pytest.approx(expected, rel=1e-6, abs=1e-6), params
-        assert feasible == (margin >= params.min_margin)
-
-
-def test_hold_on_a_flat_object_is_limited_by_the_weakest_cone_at_full_force():
-    # f_t = τ = 0, f_n = f_max: margin = f_max · min(μ_h, 1, μ_g (1 + m g / f_max))
-    params = FeasibilityParams(mu_hand=0.5, mu_ground=0.8, mass=0.195, com_along=0.0)
-    _, margin = is_feasible(params, Motion.HOLD)
-    assert margin == pytest.approx(0.5 * params.f_max, rel=1e-6)
-    wrench = feasibility.best_wrench(params, Motion.HOLD)[1]
-    np.testing.assert_allclose(wrench, [params.f_max, 0.0, 0.0], atol=1e-5)
-
-
-def test_hand_slides_only_if_the_hand_neither_pivots_nor_drags_the_object():
-    # Hand sliding needs d μ_h < l_h (else the hand pivots first) and μ_h f_n < μ_g (f_n + m g)
-    # for some allowed f_n (else the object slides on the ground first).
-    short, low = FeasibilityParams(mu_hand=0.3, mu_ground=0.8, d=0.08), FeasibilityParams(mu_hand=0.3, d=0.2)
-    assert is_feasible(short, Motion.SLIDE_HAND_POS)[0]  # d μ_h / l_h = 0.48
-    assert not is_feasible(low, Motion.SLIDE_HAND_POS)[0]  # d μ_h / l_h = 1.2: the hand pivots
-    grippy = FeasibilityParams(mu_hand=0.9, mu_ground=0.3, mass=0.2, d=0.04)
-    # μ_g m g / (μ_h − μ_g) = 0.98 N < f_min = 3 N: the object slides first at every allowed force
-    assert not is_feasible(grippy, Motion.SLIDE_HAND_POS)[0]
-    assert is_feasible(grippy, Motion.SLIDE_GROUND_POS)[0]
-
-
-def test_mirror_symmetry_of_the_slides():
-    for theta in (-0.3, 0.1, 0.4):
-        for pos, neg in (
-            (Motion.SLIDE_HAND_POS, Motion.SLIDE_HAND_NEG),
-            (Motion.SLIDE_GROUND_POS, Motion.SLIDE_GROUND_NEG),
-        ):
-            left = is_feasible(FeasibilityParams(theta_o=theta, com_along=0.0), pos)[1]
-            right = is_feasible(FeasibilityParams(theta_o=-theta, com_along=0.0), neg)[1]
-            assert left == pytest.approx(right, rel=1e-6, abs=1e-6)
-
-
-def test_concurrent_threads_get_the_serial_answers():
-    # trials may share a Dask worker's threads: the cached LP and buffers are per thread
-    from concurrent.futures import ThreadPoolExecutor
-
-    cases = [(p, m) for p in FLAT_CASES[:8] for m in (Motion.HOLD, Motion.SLIDE_GROUND_NEG)]
-    serial = [is_feasible(p, m) for p, m in cases]
-    with ThreadPoolExecutor(4) as pool:
-        assert list(pool.map(lambda case: is_feasible(*case), cases)) == serial
 
 
 def test_feasibility_study_writes_points_and_heat_maps(tmp_path):

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ccopt import contact, modes
+from ccopt import contact, modes, validation
 from ccopt.contact import N_CONE_ROWS, Row
 from ccopt.control.qp import QPInstance, QPSolution, QPSolver, make_solver
 from ccopt.hand import Hand
@@ -99,6 +99,15 @@ class ControllerParams:
                 raise ValueError(f"{name} must be positive, got {value!r}")
         if len(self.max_speed) != 3 or not all(math.isfinite(v) and v > 0.0 for v in self.max_speed):
             raise ValueError(f"max_speed must be three positive speeds, got {self.max_speed!r}")
+
+    def check_hand(self, hand: Hand) -> None:
+        """``ValueError`` unless the target normal force lies inside the hand's force limits."""
+        f_min, f_max = hand.force_limits
+        if not f_min < self.normal_force < f_max:
+            raise ValueError(
+                f"normal_force {self.normal_force} N must lie inside the hand's force limits "
+                f"{hand.force_limits}"
+            )
 
 
 @dataclass(frozen=True)
@@ -173,19 +182,9 @@ class Controller:
     ) -> None:
         self.hand = hand if hand is not None else Hand()
         self.params = params if params is not None else ControllerParams()
-        if not isinstance(self.hand, Hand):
-            raise TypeError(f"hand must be a Hand, got {type(self.hand).__name__} {self.hand!r}")
-        if not isinstance(self.params, ControllerParams):
-            raise TypeError(f"params must be a ControllerParams, got {type(self.params).__name__}")
-        if not (math.isfinite(period) and period > 0.0):
-            raise ValueError(f"control period must be a positive number of seconds, got {period!r}")
-        f_min, f_max = self.hand.force_limits
-        if not f_min < self.params.normal_force < f_max:
-            raise ValueError(
-                f"normal_force {self.params.normal_force} N must lie inside the hand's force limits "
-                f"{self.hand.force_limits}"
-            )
-        self.period = float(period)
+        validation.check_types((("hand", self.hand, Hand), ("params", self.params, ControllerParams)))
+        self.period = validation.positive("control period", period)
+        self.params.check_hand(self.hand)
         self.solver = solver if solver is not None else make_solver("codegen")
         self._convergence = 1.0 - math.exp(-self.params.convergence_rate * self.period)
         self._force_gain = 1.0 - math.exp(-self.params.force_rate * self.period)

@@ -33,14 +33,14 @@ import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ccopt import contact, geometry
+from ccopt import contact, geometry, validation
 from ccopt.casadi_eval import BufferedFunction
 from ccopt.contact import N_CONE_ROWS
 from ccopt.estimation.angle_filter import AngleFilter, AngleFilterParams
 from ccopt.estimation.classifier import ModeClassifier, ModeParams
 from ccopt.estimation.friction import HandFrictionEstimator, HandFrictionParams
 from ccopt.estimation.ground_cone import GroundCone, GroundConeEstimator, GroundConeParams
-from ccopt.estimation.kinematics import KinematicEstimator, KinematicsParams
+from ccopt.estimation.kinematics import KinematicEstimate, KinematicEstimator, KinematicsParams
 from ccopt.estimation.quantile import check_number
 from ccopt.hand import Hand
 from ccopt.modes import ContactConfiguration, ContactMode, HandGeometry
@@ -95,9 +95,7 @@ class EstimatorParams:
             ("kinematics", KinematicsParams),
             ("theta_filter", AngleFilterParams),
         )
-        for name, kind in parts:
-            if not isinstance(getattr(self, name), kind):
-                raise TypeError(f"{name} must be a {kind.__name__}, got {getattr(self, name)!r}")
+        validation.check_types((name, getattr(self, name), kind) for name, kind in parts)
         check_number("contact_force", self.contact_force, low_open=False)
 
 
@@ -172,11 +170,8 @@ class Estimator:
 
     def __init__(self, hand: Hand | None = None, params: EstimatorParams | None = None) -> None:
         self.hand = hand if hand is not None else Hand()
-        if not isinstance(self.hand, Hand):
-            raise TypeError(f"hand must be a Hand, got {type(self.hand).__name__} {self.hand!r}")
         self.params = params if params is not None else EstimatorParams()
-        if not isinstance(self.params, EstimatorParams):
-            raise TypeError(f"params must be an EstimatorParams, got {type(self.params).__name__}")
+        validation.check_types((("hand", self.hand, Hand), ("params", self.params, EstimatorParams)))
         self.friction = HandFrictionEstimator(self.hand.half_length, self.params.friction)
         self.ground = GroundConeEstimator(self.params.ground)
         self.classifier = ModeClassifier(self.params.modes)
@@ -223,34 +218,9 @@ class Estimator:
             theta_o = self.theta_filter.update(time, theta_o)
         else:
             self.theta_filter.reset()
-        row_valid = np.array(valid)
-        wrench.flags.writeable = False
-        row_valid.flags.writeable = False
-        self._last = Estimate(
-            time=float(time),
-            wrench=wrench,
-            cone_rows=cone_rows,
-            cone_bounds=cone_bounds,
-            margins=margins,
-            row_valid=row_valid,
-            mu_h=friction.mu_h,
-            torque_lever=friction.l_h_eff,
-            ground_rows=ground.A,
-            ground_bounds=ground.b,
-            mu_g=ground.mu_g,
-            hand_mode=modes.hand_mode,
-            hand_geometry=modes.hand_geometry,
-            ground_mode=modes.ground_mode,
-            in_contact=in_contact,
-            theta_o=theta_o,
-            s_h=kinematics.s_h,
-            s_g=kinematics.s_g,
-            d=kinematics.d,
-            r_o=kinematics.r_o,
-            theta_o_valid=kinematics.theta_o_valid,
-            s_h_valid=kinematics.s_h_valid,
-            contact_valid=kinematics.contact_valid,
-        )
+        cone = (cone_rows, cone_bounds, margins)
+        parts = (valid, friction, ground, modes, in_contact, theta_o, kinematics)
+        self._last = _assemble(time, wrench, cone, *parts)
         return self._last
 
     def _cone(
@@ -303,35 +273,62 @@ _GROUND_STICKING = {
 """Every configuration with the ground sticking, by ``(hand mode, hand geometry)`` (immutable)."""
 
 
-def _empty_estimate(time: float, friction: HandFrictionEstimator, ground: GroundConeEstimator) -> Estimate:
-    """The estimate before any finite sample: no cone (NaN), nothing valid, not in contact."""
-    nan = math.nan
+def _assemble(
+    time: float,
+    wrench: np.ndarray,
+    cone: tuple[np.ndarray, np.ndarray, np.ndarray],
+    valid: list[bool],
+    friction: HandFrictionEstimator,
+    ground: GroundCone,
+    modes: ContactConfiguration,
+    in_contact: bool,
+    theta_o: float,
+    kinematics: KinematicEstimate,
+    skipped: bool = False,
+) -> Estimate:
+    """An :class:`Estimate` from its parts (its arrays made read-only)."""
+    row_valid = np.array(valid)
+    wrench.flags.writeable = False
+    row_valid.flags.writeable = False
+    cone_rows, cone_bounds, margins = cone
     return Estimate(
         time=float(time),
-        wrench=np.full(3, nan),
-        cone_rows=np.full((N_CONE_ROWS, 3), nan),
-        cone_bounds=np.full(N_CONE_ROWS, nan),
-        margins=np.full(N_CONE_ROWS, nan),
-        row_valid=np.zeros(N_CONE_ROWS, dtype=bool),
+        wrench=wrench,
+        cone_rows=cone_rows,
+        cone_bounds=cone_bounds,
+        margins=margins,
+        row_valid=row_valid,
         mu_h=friction.mu_h,
         torque_lever=friction.l_h_eff,
-        ground_rows=ground.cone.A,
-        ground_bounds=ground.cone.b,
-        mu_g=nan,
-        hand_mode=ContactMode.STICK,
-        hand_geometry=HandGeometry.FLUSH,
-        ground_mode=ContactMode.STICK,
-        in_contact=False,
-        theta_o=nan,
-        s_h=nan,
-        s_g=nan,
-        d=nan,
-        r_o=np.full(2, nan),
-        theta_o_valid=False,
-        s_h_valid=False,
-        contact_valid=False,
-        skipped=True,
+        ground_rows=ground.A,
+        ground_bounds=ground.b,
+        mu_g=ground.mu_g,
+        **{name: getattr(modes, name) for name in _MODE_FIELDS},
+        in_contact=in_contact,
+        theta_o=theta_o,
+        **{name: getattr(kinematics, name) for name in _KINEMATIC_FIELDS},
+        skipped=skipped,
     )
+
+
+_MODE_FIELDS = ("hand_mode", "hand_geometry", "ground_mode")
+"""Fields an :class:`Estimate` takes from the classified :class:`~ccopt.modes.ContactConfiguration`."""
+_KINEMATIC_FIELDS = ("s_h", "s_g", "d", "r_o", "theta_o_valid", "s_h_valid", "contact_valid")
+"""Fields an :class:`Estimate` takes from the :class:`~ccopt.estimation.kinematics.KinematicEstimate`
+(its ``θ_o`` goes through the angle filter first)."""
+
+
+_UNKNOWN_KINEMATICS = KinematicEstimate(
+    math.nan, math.nan, math.nan, math.nan, np.full(2, math.nan), (math.nan,) * 4, False, False, False
+)
+
+
+def _empty_estimate(time: float, friction: HandFrictionEstimator, ground: GroundConeEstimator) -> Estimate:
+    """The estimate before any finite sample: no cone (NaN), nothing valid, not in contact."""
+    nan = np.full(N_CONE_ROWS, math.nan)
+    cone = (np.full((N_CONE_ROWS, 3), math.nan), nan, nan.copy())
+    parts = (np.full(3, math.nan), cone, [False] * N_CONE_ROWS, friction, ground.cone, ContactConfiguration())
+    return _assemble(time, *parts, False, math.nan, _UNKNOWN_KINEMATICS, skipped=True)
 
 
 def replay(

@@ -19,38 +19,12 @@ NumPy and the (rare, for tail levels) marker moves run per stream.
 from __future__ import annotations
 
 import math
-from numbers import Real
 
 import numpy as np
 
+from ccopt.validation import check_count, check_number
+
 N_MARKERS = 5
-
-
-def check_number(
-    name: str, value: object, low: float = 0.0, high: float = math.inf, *, low_open: bool = True
-) -> float:
-    """``value`` as a float in ``(low, high]`` (``[low, high]`` if not ``low_open``).
-
-    The parameter check shared by the estimation modules: raises ``TypeError`` unless ``value`` is a
-    real number and ``ValueError`` unless it is finite and in range, naming ``name`` and the value.
-    """
-    if isinstance(value, bool) or not isinstance(value, Real):
-        raise TypeError(f"{name} must be a real number, got {value!r}")
-    number = float(value)
-    above_low = number > low if low_open else number >= low
-    if not (above_low and number <= high and math.isfinite(number)):
-        bracket = "(" if low_open else "["
-        raise ValueError(f"{name} must be in {bracket}{low:g}, {high:g}], got {value!r}")
-    return number
-
-
-def check_count(name: str, value: object, low: int = 1) -> int:
-    """``value`` as an int ``≥ low``; ``TypeError``/``ValueError`` naming ``name`` and the value."""
-    if isinstance(value, bool) or not isinstance(value, int | np.integer):
-        raise TypeError(f"{name} must be an integer, got {value!r}")
-    if value < low:
-        raise ValueError(f"{name} must be an integer ≥ {low}, got {value!r}")
-    return int(value)
 
 
 def check_level(level: object, name: str = "level") -> float:

@@ -9,31 +9,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from numbers import Real
 from typing import Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ccopt import validation
 from ccopt.hand import Hand
 from ccopt.objects import PlanarObject
 from ccopt.plant.truth import Truth
-
-
-def _real(name: str, value: object) -> float:
-    if isinstance(value, bool) or not isinstance(value, Real):
-        raise TypeError(f"{name} must be a real number, got {type(value).__name__} {value!r}")
-    number = float(value)
-    if not math.isfinite(number):
-        raise ValueError(f"{name} must be finite, got {number!r}")
-    return number
-
-
-def _positive(name: str, value: object) -> float:
-    number = _real(name, value)
-    if number <= 0.0:
-        raise ValueError(f"{name} must be positive, got {number!r}")
-    return number
 
 
 def planar_vector(name: str, value: ArrayLike) -> np.ndarray:
@@ -73,12 +57,12 @@ class PlantParams:
 
     def __post_init__(self) -> None:
         for name in ("depth", "impratio"):
-            object.__setattr__(self, name, _positive(name, getattr(self, name)))
-        timestep = _positive("timestep", self.timestep)
+            object.__setattr__(self, name, validation.positive(name, getattr(self, name)))
+        timestep = validation.positive("timestep", self.timestep)
         if timestep > 0.01:
             raise ValueError(f"timestep must be at most 0.01 s, got {timestep!r}")
         object.__setattr__(self, "timestep", timestep)
-        timeconst = _positive("contact_timeconst", self.contact_timeconst)
+        timeconst = validation.positive("contact_timeconst", self.contact_timeconst)
         if timeconst < 2.0 * timestep:
             raise ValueError(
                 f"contact_timeconst must be at least twice the timestep ({2.0 * timestep} s), "
@@ -87,7 +71,7 @@ class PlantParams:
         object.__setattr__(self, "contact_timeconst", timeconst)
         if isinstance(self.solimp, str) or np.ndim(self.solimp) != 1 or len(self.solimp) != 3:
             raise ValueError(f"solimp must be three numbers (d_min, d_max, width), got {self.solimp!r}")
-        d_min, d_max, width = (_real(f"solimp[{i}]", v) for i, v in enumerate(self.solimp))
+        d_min, d_max, width = (validation.real(f"solimp[{i}]", v) for i, v in enumerate(self.solimp))
         if not 0.0 < d_min <= d_max < 1.0 or width <= 0.0:
             raise ValueError(f"solimp must satisfy 0 < d_min <= d_max < 1 and width > 0, got {self.solimp!r}")
         object.__setattr__(self, "solimp", (d_min, d_max, width))
@@ -121,9 +105,9 @@ class StartConfig:
             raise ValueError(f"hand_face must be non-negative, got {face}")
         object.__setattr__(self, "hand_face", int(face))
         for name in ("theta_o", "s_h", "x_o"):
-            object.__setattr__(self, name, _real(name, getattr(self, name)))
-        object.__setattr__(self, "normal_force", _positive("normal_force", self.normal_force))
-        settle = _real("settle_time", self.settle_time)
+            object.__setattr__(self, name, validation.real(name, getattr(self, name)))
+        object.__setattr__(self, "normal_force", validation.positive("normal_force", self.normal_force))
+        settle = validation.real("settle_time", self.settle_time)
         if settle < 0.0:
             raise ValueError(f"settle_time must be non-negative, got {settle!r}")
         object.__setattr__(self, "settle_time", settle)
@@ -136,15 +120,9 @@ def plant_inputs(
     params = PlantParams() if params is None else params
     start = StartConfig() if start is None else start
     hand = Hand() if hand is None else hand
-    expected = (
-        ("obj", obj, PlanarObject),
-        ("params", params, PlantParams),
-        ("start", start, StartConfig),
-        ("hand", hand, Hand),
-    )
-    for name, value, kind in expected:
-        if not isinstance(value, kind):
-            raise TypeError(f"{name} must be a {kind.__name__}, got {type(value).__name__} {value!r}")
+    parts = (("obj", PlanarObject), ("params", PlantParams), ("start", StartConfig), ("hand", Hand))
+    values = {"obj": obj, "params": params, "start": start, "hand": hand}
+    validation.check_types((name, values[name], kind) for name, kind in parts)
     return obj, params, start, hand
 
 

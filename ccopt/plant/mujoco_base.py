@@ -1,8 +1,9 @@
 """What both MuJoCo plants share: the model and its data, the clock, pushes on the object, the object's
 state and ground truth.
 
-A plant subclasses :class:`MujocoPlant`, builds its MJCF (:mod:`ccopt.plant.scene` for the object,
-ground and contact pairs), calls :meth:`MujocoPlant._load` and implements the hand: how one batch of
+A plant subclasses :class:`MujocoPlant`: its :meth:`MujocoPlant._build` builds its MJCF
+(:mod:`ccopt.plant.scene` for the object, ground and contact pairs), calls :meth:`MujocoPlant._load`,
+places and settles the system; it implements the hand: how one batch of
 timesteps is advanced (:meth:`MujocoPlant._advance`), the hand's pose, velocity and wrenches, and the
 ground's wrench. Frames and signs are those of :mod:`ccopt.geometry`.
 """
@@ -51,12 +52,17 @@ class MujocoPlant:
     def __init__(
         self,
         obj: PlanarObject,
-        params: PlantParams | None,
-        start: StartConfig | None,
-        hand: Hand | None,
+        params: PlantParams | None = None,
+        start: StartConfig | None = None,
+        hand: Hand | None = None,
     ) -> None:
         self.obj, self.params, self.start, self.hand = plant_inputs(obj, params, start, hand)
         self._push_end: float | None = None
+        self._build()
+
+    def _build(self) -> None:
+        """Build the model (:meth:`_load`), place the object and the hand, settle, reset the clock."""
+        raise NotImplementedError
 
     def _load(self, xml: str) -> None:
         """Compile ``xml`` and look up the object, the ground and the hand geom."""

@@ -184,10 +184,12 @@ class PandaPlant(MujocoPlant):
         *,
         panda: PandaParams | None = None,
     ) -> None:
-        super().__init__(obj, params, start, hand)
         if panda is not None and not isinstance(panda, PandaParams):
             raise TypeError(f"panda must be a PandaParams, got {type(panda).__name__} {panda!r}")
         self.panda_params = panda or PandaParams()
+        super().__init__(obj, params, start, hand)
+
+    def _build(self) -> None:
         self.plate = hand_plate(self.hand, self.params)
         self.panda: Panda = load_panda(self.plate, self.panda_params.mount, self.panda_params.armature)
         object_pose, start_hand, target = start_poses(self.obj, self.start, self.hand)

@@ -17,7 +17,7 @@ from ccopt import geometry
 from ccopt.hand import Hand
 from ccopt.objects import PlanarObject
 from ccopt.plant import scene
-from ccopt.plant.base import PlantParams, StartConfig, planar_vector
+from ccopt.plant.base import PlantParams, planar_vector
 from ccopt.plant.mujoco_base import HAND_GEOM, MujocoPlant, joint_slice
 from ccopt.plant.placement import start_poses
 
@@ -87,14 +87,7 @@ class PlanarPlant(MujocoPlant):
         hand: the robot's hand (its length, impedance and body).
     """
 
-    def __init__(
-        self,
-        obj: PlanarObject,
-        params: PlantParams | None = None,
-        start: StartConfig | None = None,
-        hand: Hand | None = None,
-    ) -> None:
-        super().__init__(obj, params, start, hand)
+    def _build(self) -> None:
         object_pose, hand_pose, target = start_poses(self.obj, self.start, self.hand)
         self._load(planar_model_xml(self.obj, self.params, self.hand))
         m = self._model

@@ -1,0 +1,71 @@
+"""Checks at ccopt's boundaries (constructors, the CLI, the API): one clear line naming the bad value.
+
+Every check raises ``TypeError`` for a value of the wrong type and ``ValueError`` for one out of range,
+with the parameter's name and the value in the message. They run where parameters enter ccopt, never
+per tick in a hot loop.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from numbers import Real
+
+import numpy as np
+
+
+def real(name: str, value: object) -> float:
+    """``value`` as a finite float: ``TypeError`` unless a real number (not a bool), ``ValueError`` unless
+    finite."""
+    if isinstance(value, bool) or not isinstance(value, Real):
+        raise TypeError(f"{name} must be a real number, got {type(value).__name__} {value!r}")
+    number = float(value)
+    if not math.isfinite(number):
+        raise ValueError(f"{name} must be finite, got {number!r}")
+    return number
+
+
+def positive(name: str, value: object) -> float:
+    """``value`` as a finite float ``> 0`` (see :func:`real`)."""
+    number = real(name, value)
+    if number <= 0.0:
+        raise ValueError(f"{name} must be positive, got {number!r}")
+    return number
+
+
+def reals(name: str, value: object, count: int) -> tuple[float, ...]:
+    """``value`` as ``count`` finite floats (see :func:`real`; the items are named ``name[i]``)."""
+    if isinstance(value, str) or np.ndim(value) != 1 or len(value) != count:
+        raise ValueError(f"{name} must be {count} numbers, got {value!r}")
+    return tuple(real(f"{name}[{i}]", item) for i, item in enumerate(value))
+
+
+def check_number(
+    name: str, value: object, low: float = 0.0, high: float = math.inf, *, low_open: bool = True
+) -> float:
+    """``value`` as a float in ``(low, high]`` (``[low, high]`` if not ``low_open``); ``TypeError``
+    unless a real number, ``ValueError`` unless finite and in range, naming ``name`` and the value."""
+    if isinstance(value, bool) or not isinstance(value, Real):
+        raise TypeError(f"{name} must be a real number, got {value!r}")
+    number = float(value)
+    above_low = number > low if low_open else number >= low
+    if not (above_low and number <= high and math.isfinite(number)):
+        bracket = "(" if low_open else "["
+        raise ValueError(f"{name} must be in {bracket}{low:g}, {high:g}], got {value!r}")
+    return number
+
+
+def check_count(name: str, value: object, low: int = 1) -> int:
+    """``value`` as an int ``≥ low``; ``TypeError``/``ValueError`` naming ``name`` and the value."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer):
+        raise TypeError(f"{name} must be an integer, got {value!r}")
+    if value < low:
+        raise ValueError(f"{name} must be an integer ≥ {low}, got {value!r}")
+    return int(value)
+
+
+def check_types(parts: Iterable[tuple[str, object, type]]) -> None:
+    """``TypeError`` naming the first ``(name, value, kind)`` whose value is not a ``kind``."""
+    for name, value, kind in parts:
+        if not isinstance(value, kind):
+            raise TypeError(f"{name} must be a {kind.__name__}, got {type(value).__name__} {value!r}")
