@@ -1,4 +1,4 @@
-"""The contact model, written once in CasADi (paper §III and eqs. 19–21).
+"""The contact model, written once in CasADi (paper §III and eqs. 14–16).
 
 Every function here is a ``casadi.Function`` built once at import and usable symbolically (compose
 it into larger expressions, take Jacobians) or numerically through the NumPy wrappers at the bottom.
@@ -33,7 +33,7 @@ Generalized friction cone
 
 Kinematics
     While flush, ``x_h(θ_o, s_h, s_g) = (r_o − s_h e_t − d e_n, θ_o)`` with ``r_o = (s_g, y_o)``
-    (paper eq. 19). The admissible-motion vectors are its derivatives, in the hand frame:
+    (paper eq. 14). The admissible-motion vectors are its derivatives, in the hand frame:
     ``v_θ = (s_h, −d, 1)`` (the paper's ``[−d, s_h, 1]`` in ``(t, n, θ)`` order), ``v_h = (0, −1, 0)``
     (the paper's ``[−1, 0, 0]``) and ``v_g = (sin θ, cos θ, 0)`` (the world ``[1, 0, 0]``).
 """
@@ -183,7 +183,7 @@ def _build_kinematics() -> tuple[ca.Function, ca.Function]:
 
 
 hand_pose_kinematics, motion_vectors = _build_kinematics()
-"""``hand_pose_kinematics(θ_o, s_h, s_g, d, y_o) → x_h`` (world, paper eq. 19, flush hand).
+"""``hand_pose_kinematics(θ_o, s_h, s_g, d, y_o) → x_h`` (world, paper eq. 14, flush hand).
 ``motion_vectors(θ_o, s_h, d) → V (3×3)``: columns ``v_θ, v_h, v_g``, the derivative of the hand
 pose with respect to ``θ_o, s_h, s_g``, in the hand frame ``(n, t, θ)``."""
 

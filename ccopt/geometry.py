@@ -17,7 +17,7 @@ Hand contact frame
     wrench the hand exerts on the object, ``f_n > 0`` when pushing, ``τ`` about the centre of the
     hand face (CCW positive) — and a hand-frame pose increment is ``(Δn, Δt, Δθ)``.
 
-Kinematics (paper eqs. 19–21)
+Kinematics (paper eqs. 14–16)
     ``r_h = r_o − s_h e_t − d e_n`` while the hand is flush (``θ_o = θ_h``), with ``r_o = (x_o, y_o)``
     the ground contact, ``s_g = x_o``, ``s_h = (r_o − r_h)·e_t`` and ``d = (r_o − r_h)·e_n``.
 
@@ -127,7 +127,7 @@ def shift_torque(wrench_world: ArrayLike, from_point: ArrayLike, to_point: Array
 
 
 def hand_pose_from_contact(theta_o: float, s_h: float, d: float, r_o: ArrayLike) -> Array:
-    """World hand pose ``(x_h, y_h, θ_h)`` of a flush hand (``θ_h = θ_o``), paper eq. 19.
+    """World hand pose ``(x_h, y_h, θ_h)`` of a flush hand (``θ_h = θ_o``), paper eq. 14.
 
     ``s_h`` and ``d`` in m, ``r_o = (x_o, y_o)`` the ground contact (m), ``theta_o`` (rad).
     Works on floats or CasADi symbols (then ``r_o`` is a 2-vector symbol).

@@ -26,7 +26,7 @@ class Hand:
     Attributes:
         half_length: ``l_h``, half the length of the contact face, m. 3 cm by default, so that the
             hand fits on the paper's smallest faces (7 cm); the paper's own hand was 10 cm long.
-        stiffness: impedance ``(k_x, k_y, k_θ)`` in world axes, N/m, N/m, N·m/rad (DESIGN.md §5).
+        stiffness: impedance ``(k_x, k_y, k_θ)`` in world axes, N/m, N/m, N·m/rad (docs/architecture.md §5).
         damping_ratio: impedance damping as a fraction of critical damping of the free hand.
         force_limits: ``(f_min, f_max)``, the smallest and largest normal force the hand may press
             with, N.

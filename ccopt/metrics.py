@@ -135,7 +135,7 @@ def summarize(
     sim_time: float,
     wall_time: float,
 ) -> dict[str, object]:
-    """The ``summary.json`` of a run (DESIGN.md §8 and the closed-loop issue's keys)."""
+    """The ``summary.json`` of a run (docs/architecture.md §8)."""
     ratios = realised_ratios(data, steps)
     slips = unintended_slips(data, steps)
     contacts = np.asarray(data["true_contacts"], dtype=bool)

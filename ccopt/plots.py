@@ -1,4 +1,4 @@
-"""Figures of a run (paper §VII, Figs. 7–9) and a GIF of the scene, drawn from a run record.
+"""Figures of a run (paper §VII, Figs. 6–8) and a GIF of the scene, drawn from a run record.
 
 Every figure function is pure: it takes a :class:`~ccopt.record.Record` (or several, where the
 study aggregates trials) and returns a new :class:`~matplotlib.figure.Figure` rendered by Agg; no
@@ -107,7 +107,7 @@ def _label_coordinates(axes: Sequence[Axes], what: str) -> None:
     axes[-1].set_xlabel("time (s)")
 
 
-# --- Fig. 7: estimation ---------------------------------------------------------------------------
+# --- Fig. 6: estimation ---------------------------------------------------------------------------
 
 
 def _draw_traces(axes: Sequence[Axes], record: Record) -> None:
@@ -130,7 +130,7 @@ def _draw_traces(axes: Sequence[Axes], record: Record) -> None:
 
 
 def estimation_traces(record: Record) -> Figure:
-    """Fig. 7a: estimated (blue) and true (black) ``θ_o`` (deg), ``s_h`` and ``s_g`` (mm) over time
+    """Fig. 6a: estimated (blue) and true (black) ``θ_o`` (deg), ``s_h`` and ``s_g`` (mm) over time
     (s), the estimate only where the kinematics are valid; grey where that coordinate was commanded.
     """
     fig = _figure(7.0, 5.5)
@@ -161,7 +161,7 @@ def _draw_boxes(axes: Sequence[Axes], records: list[Record]) -> None:
 
 
 def estimation_error_boxes(records: Records) -> Figure:
-    """Fig. 7b: box plots of the absolute estimation error of ``θ_o`` (deg), ``s_h`` and ``s_g`` (mm)
+    """Fig. 6b: box plots of the absolute estimation error of ``θ_o`` (deg), ``s_h`` and ``s_g`` (mm)
     over the samples with valid kinematics, pooled over ``records``; median blue, whiskers 1.5 × IQR,
     outliers hidden.
     """
@@ -173,7 +173,7 @@ def estimation_error_boxes(records: Records) -> Figure:
 
 
 def estimation_figure(record: Record) -> Figure:
-    """Fig. 7 for one run: the traces (left) and the error box plots (right, one per coordinate)."""
+    """Fig. 6 for one run: the traces (left) and the error box plots (right, one per coordinate)."""
     fig = _figure(9.0, 6.0)
     axes = fig.subplots(3, 2, width_ratios=(4, 1))
     for ax in axes[:2, 0]:
@@ -185,7 +185,7 @@ def estimation_figure(record: Record) -> Figure:
     return fig
 
 
-# --- Fig. 8: friction cones -----------------------------------------------------------------------
+# --- Fig. 7: friction cones -----------------------------------------------------------------------
 
 
 def _scatter_by_mode(ax: Axes, points: np.ndarray, sliding: np.ndarray) -> None:
@@ -283,7 +283,7 @@ def _corner(rows: np.ndarray, bounds: np.ndarray, points: np.ndarray) -> list[np
 
 
 def friction_cones(record: Record) -> Figure:
-    """Fig. 8: measured wrenches, grey where the contact truly sticks and blue where it truly slides,
+    """Fig. 7: measured wrenches, grey where the contact truly sticks and blue where it truly slides,
     with the final estimated cone boundaries (black). Left: the hand, ``f_t`` against ``f_n`` (N),
     lines ``f_t = ±μ_h f_n``. Right: the world hand force ``(f_x, f_y)`` (N) and the boundary of the
     estimated ground constraint ``A f ≤ b``. Only samples with the contacts truly closed are shown.
@@ -296,7 +296,7 @@ def friction_cones(record: Record) -> Figure:
     return fig
 
 
-# --- Fig. 9: control ------------------------------------------------------------------------------
+# --- Fig. 8: control ------------------------------------------------------------------------------
 
 
 def _draw_control_errors(axes: Sequence[Axes], record: Record) -> None:
@@ -315,7 +315,7 @@ def _draw_control_errors(axes: Sequence[Axes], record: Record) -> None:
 
 
 def control_errors(record: Record) -> Figure:
-    """Fig. 9a: commanded − true value of the commanded coordinate, ``θ_o`` (deg), ``s_h`` and ``s_g``
+    """Fig. 8a: commanded − true value of the commanded coordinate, ``θ_o`` (deg), ``s_h`` and ``s_g``
     (mm), over time (s) during each step that commands it (one line per step).
     """
     fig = _figure(7.0, 5.5)
@@ -354,7 +354,7 @@ def _draw_histogram(ax: Axes, records: list[Record]) -> None:
 
 
 def realised_histogram(records: Records) -> Figure:
-    """Fig. 9b: histogram of the true change of the commanded coordinate over each step, divided by
+    """Fig. 8b: histogram of the true change of the commanded coordinate over each step, divided by
     the commanded change, pooled over ``records``; dashed line at 1 (fully realised).
     """
     records = _as_list(records)
@@ -365,7 +365,7 @@ def realised_histogram(records: Records) -> Figure:
 
 
 def control_figure(record: Record) -> Figure:
-    """Fig. 9 for one run: the control errors (left) and the histogram of realised change (right)."""
+    """Fig. 8 for one run: the control errors (left) and the histogram of realised change (right)."""
     fig = _figure(10.0, 5.5)
     left, right = fig.subfigures(1, 2, width_ratios=(3, 2))
     _draw_control_errors(left.subplots(3, 1, sharex=True), record)

@@ -1,4 +1,4 @@
-"""The run record of DESIGN.md §8, written incrementally so an interrupted run keeps its data.
+"""The run record of docs/architecture.md §8, written incrementally so an interrupted run keeps its data.
 
 A run folder holds
 

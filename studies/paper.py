@@ -10,9 +10,9 @@ default (``--schedule`` takes a built-in name or a file).
 
 Each trial is recorded to ``<out>/trials/<k>/`` (overwritten; ``ccopt plot`` draws its figures) and
 scored by :func:`ccopt.experiment.run_experiment`. Outputs in ``<out>``: ``results.json``/``results.csv`` (one
-row per trial), ``estimation_error_boxes.png`` (Fig. 7b, pooled over the trials),
-``realised_histogram.png`` (Fig. 9b), and the friction cones (Fig. 8), estimation traces (Fig. 7a)
-and control errors (Fig. 9a) of the first trial that finished (a trial whose run raised is an error
+row per trial), ``estimation_error_boxes.png`` (Fig. 6b, pooled over the trials),
+``realised_histogram.png`` (Fig. 8b), and the friction cones (Fig. 7), estimation traces (Fig. 6a)
+and control errors (Fig. 8a) of the first trial that finished (a trial whose run raised is an error
 row, its partial record left out of the figures).
 
 A trial *meets the closed-loop thresholds* (:class:`ccopt.metrics.Thresholds`) when it completed, its median

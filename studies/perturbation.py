@@ -1,4 +1,4 @@
-"""Perturbation rejection (paper §VII, Fig. 10): push a regulated object and watch the error recover.
+"""Perturbation rejection (paper §VII, Fig. 9): push a regulated object and watch the error recover.
 
     python -m studies perturbation [--forces 5,10,14] [--duration 0.15] [--object paper-triangle]
 
@@ -38,7 +38,7 @@ Which pushes cannot recover, and why (the ``why`` column):
 ``held mode`` and ``hand, not object`` can both apply (joined by ``;``).
 
 Outputs in ``<out>``: ``results.json``/``results.csv`` (traces included) and ``perturbation.png``
-(error traces per regulation and push direction, grey during the push, like Fig. 10).
+(error traces per regulation and push direction, grey during the push, like Fig. 9).
 """
 
 from __future__ import annotations
@@ -281,7 +281,7 @@ def _draw_panel(ax, runs: Sequence[tuple[Push, dict]], tolerance: float, styles:
 
 def write_figure(path: Path, specs: Sequence[Push], results: Sequence[dict]) -> None:
     """Truth error (black, grey while pushed) and the error the controller measured (blue) per
-    regulation and push direction; line style by push size; dotted: the tolerance (Fig. 10)."""
+    regulation and push direction; line style by push size; dotted: the tolerance (Fig. 9)."""
     from matplotlib.figure import Figure
 
     rows = list(dict.fromkeys((s.coordinate, s.held) for s in specs))

@@ -1,4 +1,4 @@
-"""The QP's constraints and feasible region for one estimate (paper Fig. 6b–c).
+"""The QP's constraints and feasible region for one estimate (paper Fig. 4b–c).
 
     python -m studies qp-region [--theta 10] [--s-hand 10] [--wrench 12,1.5,0.1] [--motion pivot] ...
 
@@ -7,14 +7,14 @@ The estimate is exact here: the cone is the true one of the given object
 (:class:`ccopt.control.controller.Controller`, default gains) builds the tick's QP for the commanded
 motion and change. Two figures, in the hand frame:
 
-``constraints.png`` (Fig. 6b)
+``constraints.png`` (Fig. 4b)
     Top, the ``(f_t, f_n)`` plane: the hand friction cone (dashed blue), the ground friction cone
     rotated into the hand frame (dashed purple) and the normal-force limits (dotted grey), the region
     they leave shaded. Bottom, the ``(τ, f_n)`` plane: the hand torque cone (solid red). Rows the motion
     removes are drawn faded. The measured wrench is a black dot, the wrench the QP's step predicts
     (``w + K Δx``) an orange star. The QP's own rows carry the controller's margins; these are the
     cone's boundaries.
-``region.png`` (Fig. 6c)
+``region.png`` (Fig. 4c)
     The polytope ``{Δx : A Δx ≤ ub}`` of the QP's active rows (:func:`ccopt.control.qp.build_qp_matrices`)
     in ``(Δn, Δt, Δθ)`` (mm, mm, deg) in grey, the target direction of the commanded coordinate
     (``v_θ``, ``v_h`` or ``v_g``) in black, the set minimising that term — the plane ``vᵀΔx = δ``
@@ -204,7 +204,7 @@ def polytope_faces(rows: np.ndarray, vertices: np.ndarray) -> list[np.ndarray]:
 
 
 def compute_region(state: RegionState, controller: Controller) -> Region:
-    """The tick's QP for ``state`` and the geometry of Fig. 6c."""
+    """The tick's QP for ``state`` and the geometry of Fig. 4c."""
     output = controller.update(control_input(state), command(state))
     instance = output.instance
     _, _, rows, upper = (np.asarray(m) for m in QP_MATRICES(instance.packed))
@@ -246,7 +246,7 @@ _PLANES = (  # (wrench components drawn as (x, y), cone rows in that plane as (r
     ),
     ((2, 0), (((Row.HAND_PIVOT_POS, Row.HAND_PIVOT_NEG), "tab:red", "-", "hand torque"),)),
 )
-"""Fig. 6b's two planes: ``(f_t, f_n)`` and ``(τ, f_n)``; each row drawn has a zero third component."""
+"""Fig. 4b's two planes: ``(f_t, f_n)`` and ``(τ, f_n)``; each row drawn has a zero third component."""
 
 
 def _boundary(ax, normal: np.ndarray, bound: float, x_span: np.ndarray, **style) -> None:
@@ -259,7 +259,7 @@ def _boundary(ax, normal: np.ndarray, bound: float, x_span: np.ndarray, **style)
 
 
 def constraints_figure(path: Path, state: RegionState, region: Region) -> None:
-    """Fig. 6b: the cone rows in the ``(f_t, f_n)`` and ``(τ, f_n)`` planes with the wrenches."""
+    """Fig. 4b: the cone rows in the ``(f_t, f_n)`` and ``(τ, f_n)`` planes with the wrenches."""
     from matplotlib.figure import Figure
 
     cone, bounds = contact.model_friction_cone(
@@ -300,7 +300,7 @@ def constraints_figure(path: Path, state: RegionState, region: Region) -> None:
 
 
 def region_figure(path: Path, state: RegionState, region: Region) -> None:
-    """Fig. 6c: the feasible polytope, the target direction, the minimising plane and the solution."""
+    """Fig. 4c: the feasible polytope, the target direction, the minimising plane and the solution."""
     from matplotlib.figure import Figure
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 

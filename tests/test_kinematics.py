@@ -82,7 +82,7 @@ def test_s_h_follows_a_hand_slide():
         estimate = step(estimator, pose, HAND_SLIDES)
         assert estimate.s_h_valid
         errors.append(estimate.s_h - s_h)
-    assert np.mean(np.abs(errors)) < 5e-4 and np.max(np.abs(errors)) < 1.5e-3  # eq. 21, sample by sample
+    assert np.mean(np.abs(errors)) < 5e-4 and np.max(np.abs(errors)) < 1.5e-3  # eq. 16, sample by sample
     estimate = step(estimator, measured(geometry.hand_pose_from_contact(0.05, S_H + 0.03, D, R_O), rng))
     assert abs(estimate.s_h - (S_H + 0.03)) < 1e-3
     assert np.all(np.abs(estimate.r_o - R_O) < 1e-3)
@@ -155,7 +155,7 @@ def test_bad_parameters_raise_naming_the_field(field, value, error):
 
 
 def test_an_unreported_hand_slide_is_caught_by_the_innovation_gate():
-    """The modes say sticking, the hand really slides: eq. 21's innovations re-estimate ``s_h``."""
+    """The modes say sticking, the hand really slides: eq. 16's innovations re-estimate ``s_h``."""
     estimator, rng = KinematicEstimator(L_H), np.random.default_rng(11)
     pivot_about_ground(estimator, rng)
     positions = np.linspace(S_H, S_H + 0.02, 200)
@@ -170,7 +170,7 @@ def test_an_unreported_hand_slide_is_caught_by_the_innovation_gate():
 
 
 def test_an_unreported_move_of_the_ground_contact_resets_instead_of_keeping_a_wrong_one():
-    """The modes say sticking, but the object has rolled onto a vertex 5 mm higher: eq. 20 cannot
+    """The modes say sticking, but the object has rolled onto a vertex 5 mm higher: eq. 15 cannot
     explain it, and after ``slip_samples`` rejections the estimate resets rather than report the old
     ``r_o`` as valid. (A move along ``e_t`` alone is kinematically a hand slide: see the docstring.)"""
     estimator, rng = KinematicEstimator(L_H), np.random.default_rng(12)
@@ -206,7 +206,7 @@ def test_a_ground_reported_sliding_with_a_sticking_hand_moves_r_o_not_s_h(theta)
 
 def test_a_ground_slip_while_the_hand_slides_too_gives_both_from_the_tilted_hand():
     """Both contacts "may slide" and both do (the object 8 mm along x, the hand 6 mm along the
-    face) with the hand tilted 0.35 rad: eq. 20 sees the ground's share, eq. 21 the rest."""
+    face) with the hand tilted 0.35 rad: eq. 15 sees the ground's share, eq. 16 the rest."""
     estimator, rng = KinematicEstimator(L_H), np.random.default_rng(14)
     pivot_about_ground(estimator, rng)
     theta = 0.35

@@ -86,7 +86,7 @@ def test_hand_frame_axes_follow_the_planar_conventions(panda):
     rot = hand_placement(panda, q).rotation
     np.testing.assert_allclose(rot[:, 2], [0.0, 0.0, -1.0], atol=1e-6)  # e_n points down at θ = 0
     np.testing.assert_allclose(rot[:, 0], [1.0, 0.0, 0.0], atol=1e-6)  # e_t along +x
-    # A CCW planar rotation is a rotation about MuJoCo (0, -1, 0): the hinge axis of DESIGN.md §3.
+    # A CCW planar rotation is a rotation about MuJoCo (0, -1, 0): the hinge axis of docs/architecture.md §3.
     tilted = hand_rotation(0.3)
     np.testing.assert_allclose(tilted, pin.exp3(np.array([0.0, -0.3, 0.0])) @ hand_rotation(0.0), atol=1e-12)
 

@@ -26,7 +26,7 @@ F_N = 8.0
 
 
 HAND = Hand(half_length=0.05)
-"""The plant tests' hand: 10 cm long (DESIGN.md §6), as on the faces these tests press."""
+"""The plant tests' hand: 10 cm long (docs/architecture.md §6), as on the faces these tests press."""
 
 
 def flat_rectangle(mu_hand: float, mu_ground: float, s_h: float = -0.09, f_n: float = 10.0) -> PlanarPlant:

@@ -1,6 +1,6 @@
 """Random, realistic impedance-target QP instances, for tests, benchmarks and studies.
 
-An instance is what the controller builds on a tick (DESIGN.md §5): the generalized friction cone
+An instance is what the controller builds on a tick (docs/architecture.md §5): the generalized friction cone
 of a plausible object (:func:`ccopt.contact.model_friction_cone`) plus normal-force limits, the
 measured wrench near or inside that cone, one commanded motion's row removed, and tracking terms
 along the admissible-motion vectors, with a regularisation 2–50 % of the tracking weights (as the
@@ -17,7 +17,7 @@ from ccopt.control.qp import MAX_ROWS, MAX_TERMS, QPInstance
 from ccopt.hand import Hand
 
 DEFAULT_STIFFNESS = Hand().stiffness_in_hand_frame(0.0)
-"""The default hand's impedance in its own frame (DESIGN.md §5), N/m, N/m, N·m/rad."""
+"""The default hand's impedance in its own frame (docs/architecture.md §5), N/m, N/m, N·m/rad."""
 
 
 def random_instance(rng: np.random.Generator, n_rows: int | None = None) -> QPInstance:

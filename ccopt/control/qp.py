@@ -1,9 +1,9 @@
-"""The impedance-target QP of paper eqs. 22–26, in the soft form of DESIGN.md §5.
+"""The impedance-target QP of paper eqs. 17–21, in the soft form of docs/architecture.md §5.
 
 Per control tick, find the hand-frame change of the impedance target ``Δx`` (m, m, rad; order
 ``(n, t, θ)``) and the wrench change ``Δw = K Δx`` that
 
-    minimise    α₀‖Δx‖² + Σᵢ αᵢ (vᵢᵀΔx − δᵢ)²                 (δᵢ = βᵢ Δεᵢ, paper eq. 26)
+    minimise    α₀‖Δx‖² + Σᵢ αᵢ (vᵢᵀΔx − δᵢ)²                 (δᵢ = βᵢ Δεᵢ, paper eq. 21)
     subject to  nⱼᵀ(w_meas + γⱼ K Δx) ≤ bⱼ  for every active row j.
 
 The problem has a fixed maximum size (:data:`MAX_ROWS` rows, :data:`MAX_TERMS` tracking terms) and
@@ -54,9 +54,9 @@ MAX_TERMS = 4
 SLACK_WEIGHT = 1e3
 """``ρ``: linear cost of the slack; far above any multiplier of the hard problem.
 
-DESIGN.md suggests 1e8, but with steps in metres and rows in newtons the hard problem's multipliers
-are tiny (``|∇cost| ≲ 1`` over row gradients ``γ K n ≳ 60``, so ``λ ≲ 0.02`` for tracking weights up
-to ~10), and 1e8 against a unit Hessian costs DAQP's dual active set up to 30 % of the violation on
+The founding design suggested 1e8, but with steps in metres and rows in newtons the hard problem's
+multipliers are tiny (``|∇cost| ≲ 1`` over row gradients ``γ K n ≳ 60``, so ``λ ≲ 0.02`` for tracking
+weights up to ~10), and 1e8 against a unit Hessian costs DAQP's dual active set up to 30 % of the violation on
 infeasible ticks through cancellation. 1e3 keeps a margin of ~5·10⁴ over the multipliers and solves
 infeasible ticks to ~1e-6 relative (measured on 600 instances against an LP)."""
 

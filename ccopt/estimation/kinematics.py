@@ -1,11 +1,11 @@
 """Kinematic estimator: ground contact, ``d``, hand sliding position and object angle (paper §IV-B).
 
-While the hand is flush, paper eq. 19 (:func:`ccopt.geometry.hand_pose_from_contact`) ties the
+While the hand is flush, paper eq. 14 (:func:`ccopt.geometry.hand_pose_from_contact`) ties the
 measured hand pose to the unknowns ``(d, x_o, y_o, s_h)``:
 
     r_h = r_o − s_h e_t − d e_n,  i.e.
-    r_h·e_n = −d + x_o (I·e_n) + y_o (J·e_n)        (eq. 20, the paper's regression)
-    r_h·e_t = x_o (I·e_t) + y_o (J·e_t) − s_h        (eq. 21: s_h = (r_o − r_h)·e_t)
+    r_h·e_n = −d + x_o (I·e_n) + y_o (J·e_n)        (eq. 15, the paper's regression)
+    r_h·e_t = x_o (I·e_t) + y_o (J·e_t) − s_h        (eq. 16: s_h = (r_o − r_h)·e_t)
 
 Both projections are linear in the unknowns, so one recursive least-squares (Kalman) estimate of
 ``x = (d, x_o, y_o, s_h)`` with covariance ``P`` covers every case of the paper. What the contact
@@ -13,14 +13,14 @@ modes allow to change is *released* (its row and column of ``P`` cleared, its va
 ``prior_std²``) before the measurement update:
 
 =================================  ==========================================================
-ground sticks, hand flush          eq. 20 (and eq. 21 if the hand sticks, so ``s_h`` is constant)
+ground sticks, hand flush          eq. 15 (and eq. 16 if the hand sticks, so ``s_h`` is constant)
                                    added when the hand has rotated ``excitation_angle`` since the
                                    last sample; while the hand slides ``s_h`` is released and
-                                   eq. 21 re-estimates it every sample
+                                   eq. 16 re-estimates it every sample
 ground slides, hand sticks, flush  ``r_o`` released and both rows used every sample: ``r_o`` moves
                                    rigidly with the hand with the last ``d`` and ``s_h``
 ground *may* slide (reported, but  as if it sticks, until an innovation exceeds ``slip_gate``
-not acted on), hand flush          standard deviations (eq. 20, and eq. 21 if the hand sticks); then,
+not acted on), hand flush          standard deviations (eq. 15, and eq. 16 if the hand sticks); then,
                                    until the ground is reported sticking again, rigidly (hand
                                    sticking) or with ``x_o`` and ``s_h`` both released (hand sliding)
 ground sticks, hand pivots         no update; ``r_o`` and ``d`` stay, ``θ_o`` and ``s_h`` follow from
@@ -29,16 +29,16 @@ hand not in contact                no update; ``s_h`` released
 anything else (indeterminate)      reset
 =================================  ==========================================================
 
-Using eq. 21 while the hand sticks (the paper regresses eq. 20 alone) conditions the regression far
+Using eq. 16 while the hand sticks (the paper regresses eq. 15 alone) conditions the regression far
 better: for a rigid rotation about the ground contact sampled every 0.5° with 0.3 mm of noise, the
 standard deviation of ``d`` and ``y_o`` after 20° of rotation drops from ~9 mm to ~0.4 mm.
 ``θ_o = θ_h`` while flush. Estimates are *valid* when their posterior standard deviation (with the
 assumed ``position_noise``) is at most ``valid_std``.
 
 Innovation gate: a contact the modes call sticking that really moved shows up as an innovation the
-noise cannot explain (``gate`` predicted standard deviations), tested on every sample. An eq. 21
+noise cannot explain (``gate`` predicted standard deviations), tested on every sample. An eq. 16
 sample beyond it while the hand is reported sticking means the hand slid all the same: ``s_h`` is
-released and re-estimated from that sample, as while it is reported sliding. An eq. 20 sample beyond
+released and re-estimated from that sample, as while it is reported sliding. An eq. 15 sample beyond
 the gate is not used; ``slip_samples`` such samples in a row mean the ground contact moved, and the
 estimate is reset (the motion was not what the modes said). Kinematics alone cannot tell a ground
 slip along ``e_t`` from a hand slide (both move the hand along ``e_t``), so the reports decide: with
@@ -80,15 +80,15 @@ class KinematicsParams:
             including the effect of the angle noise.
         prior_std: standard deviation of an unknown before any data (m).
         valid_std: estimates are valid once their standard deviation is at most this (m).
-        gate: an eq. 20 innovation beyond this many predicted standard deviations is rejected; an
-            eq. 21 one means the hand slid.
-        slip_gate: with the ground reported sliding, an eq. 20 (or, with the hand sticking, an
-            eq. 21) innovation beyond this many predicted standard deviations means the ground slid.
+        gate: an eq. 15 innovation beyond this many predicted standard deviations is rejected; an
+            eq. 16 one means the hand slid.
+        slip_gate: with the ground reported sliding, an eq. 15 (or, with the hand sticking, an
+            eq. 16) innovation beyond this many predicted standard deviations means the ground slid.
             Low, because a false alarm costs little (``r_o`` is re-anchored to within the noise)
             and the default ``position_noise`` is about twice the default sensors' effective noise:
             on a plant recording 3 let the first slide each way run 1.6–2.0 mm before it was
             caught, 2 about 1 mm.
-        slip_samples: this many rejected eq. 20 samples in a row reset the estimate.
+        slip_samples: this many rejected eq. 15 samples in a row reset the estimate.
     """
 
     excitation_angle: float = math.radians(0.5)
@@ -136,7 +136,7 @@ class KinematicEstimate:
 
 
 class KinematicEstimator:
-    """Mode-switched recursive least squares on paper eqs. 19–21 (see the module docstring).
+    """Mode-switched recursive least squares on paper eqs. 14–16 (see the module docstring).
 
     The state (4) and covariance (4×4) are plain Python lists: at this size that is several times
     faster than NumPy.
@@ -157,11 +157,11 @@ class KinematicEstimator:
         """Forget everything (the motion was indeterminate)."""
         self._state = [0.0] * 4
         self._cov = [[self._prior_variance if i == j else 0.0 for j in range(4)] for i in range(4)]
-        self._last_theta = math.nan  # hand angle at the last eq. 20 sample
+        self._last_theta = math.nan  # hand angle at the last eq. 15 sample
         self._s_h_released = True
         self._theta_o = math.nan
         self._theta_o_valid = False
-        self._rejected = 0  # eq. 20 samples rejected in a row by the innovation gate
+        self._rejected = 0  # eq. 15 samples rejected in a row by the innovation gate
         self._ground_slipping = False  # a ground slip was seen and the ground is still reported sliding
 
     def update(
@@ -208,7 +208,7 @@ class KinematicEstimator:
     def _regress(
         self, pose: list[float], normal: list[float], tangent: list[float], hand_sticks: bool
     ) -> None:
-        """Ground sticking, hand flush: eq. 20 on excitation; eq. 21 tracks ``s_h`` (see the docstring)."""
+        """Ground sticking, hand flush: eq. 15 on excitation; eq. 16 tracks ``s_h`` (see the docstring)."""
         last = self._last_theta
         excited = (
             math.isnan(last) or abs(math.remainder(pose[2] - last, math.tau)) >= self.params.excitation_angle
@@ -228,7 +228,7 @@ class KinematicEstimator:
         self, pose: list[float], normal: list[float], tangent: list[float], hand_sticks: bool
     ) -> bool:
         """Whether the ground slid since it was first reported sliding: latched, or now an innovation
-        beyond ``slip_gate`` of eq. 20, or of eq. 21 if the hand sticks (else the hand explains it)."""
+        beyond ``slip_gate`` of eq. 15, or of eq. 16 if the hand sticks (else the hand explains it)."""
         if not self._ground_slipping:
             self._ground_slipping = self._beyond_slip_gate(*_normal_row(pose, normal)) or (
                 hand_sticks
@@ -248,7 +248,7 @@ class KinematicEstimator:
     ) -> None:
         """Ground sliding, hand flush: ``r_o`` follows the hand rigidly (hand sticking, the paper's
         case), or, with the hand sliding too, ``x_o`` and ``s_h`` both change (the object keeps its
-        height on a flat ground) and eqs. 20–21 give both."""
+        height on a flat ground) and eqs. 15–16 give both."""
         if hand_sticks:
             self._release(X_O, Y_O)
         else:
@@ -283,13 +283,13 @@ class KinematicEstimator:
             self._s_h_released = True
 
     def _measure(self, pose: list[float], normal: list[float], tangent: list[float]) -> None:
-        """Kalman update with eq. 20 (gated, :meth:`_measure_normal`), then eq. 21."""
+        """Kalman update with eq. 15 (gated, :meth:`_measure_normal`), then eq. 16."""
         self._measure_normal(pose, normal)
         self._scalar_update(*_tangent_row(pose, tangent))
         self._s_h_released = False
 
     def _measure_normal(self, pose: list[float], normal: list[float]) -> None:
-        """Eq. 20 through the innovation gate; ``slip_samples`` rejections in a row reset the estimate."""
+        """Eq. 15 through the innovation gate; ``slip_samples`` rejections in a row reset the estimate."""
         prediction = self._predict(*_normal_row(pose, normal))
         if not self._consistent(prediction):
             self._rejected += 1
@@ -356,12 +356,12 @@ class KinematicEstimator:
 
 
 def _normal_row(pose: list[float], normal: list[float]) -> tuple[tuple[float, float, float, float], float]:
-    """Eq. 20 as ``row · (d, x_o, y_o, s_h) = value``: ``r_h·e_n = −d + r_o·e_n``."""
+    """Eq. 15 as ``row · (d, x_o, y_o, s_h) = value``: ``r_h·e_n = −d + r_o·e_n``."""
     return (-1.0, normal[0], normal[1], 0.0), pose[0] * normal[0] + pose[1] * normal[1]
 
 
 def _tangent_row(pose: list[float], tangent: list[float]) -> tuple[tuple[float, float, float, float], float]:
-    """Eq. 21 as ``row · (d, x_o, y_o, s_h) = value``: ``r_h·e_t = r_o·e_t − s_h``."""
+    """Eq. 16 as ``row · (d, x_o, y_o, s_h) = value``: ``r_h·e_t = r_o·e_t − s_h``."""
     return (0.0, tangent[0], tangent[1], -1.0), pose[0] * tangent[0] + pose[1] * tangent[1]
 
 

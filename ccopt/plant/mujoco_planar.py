@@ -1,7 +1,7 @@
 """Planar MuJoCo plant: a flat impedance-controlled hand presses an object against the ground.
 
 The hand is a box whose contact face (``2 l_h`` long) is centred on the hand body's origin, with
-three planar joints so that the hand's ``qpos`` is its pose ``(x_h, y_h, θ_h)`` (DESIGN.md §3).
+three planar joints so that the hand's ``qpos`` is its pose ``(x_h, y_h, θ_h)`` (docs/architecture.md §3).
 Position actuators (``kp = K``) and velocity actuators (``kv = D``, fed the target velocity) on
 those joints make the planar impedance ``w = K (x_tar − x_h) + D (v_tar − v_h)`` at the face
 centre, in world axes; gravity is compensated.

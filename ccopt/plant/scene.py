@@ -1,9 +1,9 @@
 """MJCF building blocks shared by the MuJoCo plants: options, object, ground and contact pairs.
 
 The ccopt plane ``(x, y)`` is MuJoCo's ``(x, z)``; planar hinges use axis ``(0, −1, 0)`` so that
-``qpos`` is the counter-clockwise planar angle (DESIGN.md §3). Geoms are created with
+``qpos`` is the counter-clockwise planar angle (docs/architecture.md §3). Geoms are created with
 ``contype = conaffinity = 0``: only the explicit ``<contact><pair>`` elements collide, each with its
-own friction, ``condim = 3`` and ``solref`` (DESIGN.md §6).
+own friction, ``condim = 3`` and ``solref`` (docs/architecture.md §6).
 
 :func:`pair_wrench` reads the planar wrench one geom exerts on another from the solved contacts.
 
@@ -38,7 +38,7 @@ def _numbers(values: Iterable[float]) -> str:
 
 
 def option_xml(params: PlantParams) -> str:
-    """``<compiler>`` and ``<option>``: DESIGN.md §6 settings (``impratio`` from ``params``)."""
+    """``<compiler>`` and ``<option>``: docs/architecture.md §6 settings (``impratio`` from ``params``)."""
     return (
         '<compiler angle="radian" autolimits="true"/>'
         f'<option timestep="{params.timestep:.12g}" integrator="implicitfast" solver="Newton" '
