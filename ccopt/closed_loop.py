@@ -15,6 +15,7 @@ the coordinate while the commanded configuration holds. The source is fixed for 
 
 from __future__ import annotations
 
+import dataclasses
 import time as wallclock
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -73,6 +74,7 @@ class LoopParams:
     controller_params: ControllerParams = field(default_factory=ControllerParams)
     estimator_params: EstimatorParams = field(default_factory=EstimatorParams)
     perturbations: tuple[Perturbation, ...] = ()
+    settle_time: float = 0.2
 
     def __post_init__(self) -> None:
         if self.plant not in ("planar", "panda"):
@@ -103,6 +105,11 @@ class LoopParams:
         return self.ticks(self.controller_hz) * self.plant_params.timestep
 
 
+STEP_STATUSES = ("reached", "timeout", "infeasible")
+"""How a step can end: its coordinate settled within tolerance (by the estimate), its time ran out,
+or the estimated statics ruled it out."""
+
+
 @dataclass(frozen=True)
 class StepResult:
     """How one schedule step went, by the estimate (truth is scored in :mod:`ccopt.metrics`)."""
@@ -112,7 +119,15 @@ class StepResult:
     delta: float
     start_time: float
     end_time: float
-    reached: bool
+    status: str
+
+    @property
+    def reached(self) -> bool:
+        return self.status == "reached"
+
+    def as_dict(self) -> dict[str, object]:
+        """The result as ``meta.json`` stores it (with ``reached``)."""
+        return {**dataclasses.asdict(self), "reached": self.reached}
 
 
 @dataclass(frozen=True)
@@ -174,15 +189,25 @@ def hand_proxy(hand_pose: np.ndarray) -> np.ndarray:
 
 
 class _StepTracker:
-    """Walks the schedule: the current command, its progress source, completion and timeout."""
+    """Walks the schedule: the current command, its progress source, completion and timeout.
 
-    def __init__(self, schedule: Schedule) -> None:
+    Targets chain from the *nominal* configuration: after a reached step the next one starts from
+    where the previous one was commanded to end, not from where it stopped inside its tolerance, so
+    that small shortfalls do not add up; after a step that was not reached, or when the source of
+    progress changes (hand proxy → estimate), the nominal configuration is re-read. A step is reached
+    once its coordinate has stayed within tolerance for ``settle_time``; never on an unusable estimate.
+    """
+
+    def __init__(self, schedule: Schedule, settle_time: float) -> None:
         self.steps = schedule.steps
+        self.settle_time = settle_time
         self.index = -1
         self.results: list[StepResult] = []
         self.use_estimate = False
         self.command: Command | None = None
         self.start_time = 0.0
+        self._nominal: np.ndarray | None = None
+        self._within_since: float | None = None
 
     @property
     def step(self) -> Step:
@@ -192,42 +217,59 @@ class _StepTracker:
     def done(self) -> bool:
         return self.index >= len(self.steps)
 
-    def coordinates(self, estimate: Estimate, hand_pose: np.ndarray) -> np.ndarray:
-        if self.use_estimate and kinematics_usable(estimate):
+    def coordinates(self, estimate: Estimate, hand_pose: np.ndarray) -> np.ndarray | None:
+        """The progress coordinates ``(θ_o, s_h, s_g)`` of this step's source; None if unusable."""
+        if not self.use_estimate:
+            return hand_proxy(hand_pose)
+        if kinematics_usable(estimate):
             return np.array([estimate.theta_o, estimate.s_h, estimate.s_g])
-        return hand_proxy(hand_pose) if not self.use_estimate else self.command.targets.copy()
+        return None
 
-    def advance(self, now: float, estimate: Estimate, hand_pose: np.ndarray, reached: bool) -> None:
+    def advance(self, now: float, estimate: Estimate, hand_pose: np.ndarray, status: str) -> None:
         if self.index >= 0:
             self.results.append(
-                StepResult(self.index, self.step.kind, self.step.delta, self.start_time, now, reached)
+                StepResult(self.index, self.step.kind, self.step.delta, self.start_time, now, status)
             )
         self.index += 1
         if self.done:
             return
-        self.use_estimate = kinematics_usable(estimate)
-        targets = self.coordinates(estimate, hand_pose)
+        use_estimate = kinematics_usable(estimate)
+        if use_estimate != self.use_estimate or status != "reached":
+            self._nominal = None
+        self.use_estimate = use_estimate
+        current = self.coordinates(estimate, hand_pose)
+        if self._nominal is None:
+            self._nominal = current.copy()
+        targets = self._nominal.copy()
         if self.step.coordinate is not None:
             targets[self.step.coordinate] += self.step.delta
-        self.command = Command(self.step.motion, targets)
+        self._nominal = targets.copy()
+        self.command = Command(self.step.motion, targets, start=current)
         self.start_time = now
+        self._within_since = None
 
     def update(self, now: float, estimate: Estimate, hand_pose: np.ndarray) -> None:
         """Move to the next step when this one is reached or timed out."""
         if self.index < 0:
-            self.advance(now, estimate, hand_pose, reached=True)
+            self.advance(now, estimate, hand_pose, "reached")
             return
         elapsed = now - self.start_time
         if self.step.kind == "hold":
             if elapsed >= self.step.timeout:
-                self.advance(now, estimate, hand_pose, reached=True)
+                self.advance(now, estimate, hand_pose, "reached")
             return
         k = self.step.coordinate
-        error = self.command.targets[k] - self.coordinates(estimate, hand_pose)[k]
-        if abs(error) <= self.step.tolerance:
-            self.advance(now, estimate, hand_pose, reached=True)
+        coordinates = self.coordinates(estimate, hand_pose)
+        tolerance = self.step.tolerance
+        within = coordinates is not None and abs(self.command.targets[k] - coordinates[k]) <= tolerance
+        if not within:
+            self._within_since = None
+        elif self._within_since is None:
+            self._within_since = now
+        if within and now - self._within_since >= self.settle_time - 1e-9:
+            self.advance(now, estimate, hand_pose, "reached")
         elif elapsed >= self.step.timeout:
-            self.advance(now, estimate, hand_pose, reached=False)
+            self.advance(now, estimate, hand_pose, "timeout")
 
 
 def run(
@@ -251,7 +293,7 @@ def run(
     controller = Controller(params.hand, params.control_period, params.controller_params)
     writer = RecordWriter(out, meta or {}) if out is not None else None
     samples: dict[str, list[np.ndarray]] = {}
-    tracker = _StepTracker(schedule)
+    tracker = _StepTracker(schedule, params.settle_time)
     dt = plant.timestep
     estimator_every = params.ticks(params.estimator_hz)
     controller_every = params.ticks(params.controller_hz)
@@ -287,6 +329,8 @@ def run(
                 if tracker.done:
                     break
                 coordinates = tracker.coordinates(estimate, hand_pose)
+                if coordinates is None:  # the estimate is unusable: hold where the command says
+                    coordinates = tracker.command.targets
                 output = controller.update(control_input(estimate, hand_pose, coordinates), tracker.command)
                 last_slack, last_feasible = output.solution.slack, output.solution.feasible
                 velocity = geometry.twist_hand_to_world(hand_pose[2], output.step) / controller.period
@@ -304,7 +348,7 @@ def run(
         folder=Path(out) if out is not None else None,
     )
     if writer is not None:
-        writer.meta["steps"] = [vars(step) for step in result.steps]
+        writer.meta["steps"] = [step.as_dict() for step in result.steps]
         writer.close(status="interrupted" if interrupted else "completed")
     return result
 

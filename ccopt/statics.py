@@ -59,7 +59,8 @@ MIN_MARGIN = 0.3
 
 _TORQUE_ROWS = (Row.HAND_PIVOT_POS, Row.HAND_PIVOT_NEG)
 _N_PARAMETERS = 12  # θ_o, s_h, d, M, μ_h, l_h, vec(A) (4, column-major), b (2)
-_N_ROWS = N_CONE_ROWS + 1  # cone rows, moment balance
+_N_ROWS = N_CONE_ROWS + 3  # cone rows, moment balance, |f_n − f_nom| ≤ u
+_N_UNKNOWNS = 5  # f_n, f_t, τ, t, u
 _BIG = 1e6
 """Bound on ``|f_t|``, ``|τ|`` and ``|t|`` of the LP (N, N·m): far beyond any wrench considered."""
 LP_PROXIMAL_WEIGHT = 1e-6
@@ -159,49 +160,51 @@ class StaticsResult:
 
 
 def build_statics_lp() -> ca.Function:
-    """``(p, keep, lba, uba, lbx, ubx) → (x, rows)``: the LP of the module docstring, solved by DAQP.
+    """``(p, keep, g, lba, uba, lbx, ubx) → (x, rows)``: the LPs of the module docstring, by DAQP.
 
-    ``p = (θ_o, s_h, d, M, μ_h, l_h, vec(A), b)``; ``x = (f_n, f_t, τ, t)``. The rows are the six cone
-    rows ``s_j (b_j − n_jᵀw) − k_j t`` (``s_j = 1/l_h`` on torque rows, ``k_j = 1`` on kept rows) and
-    the moment balance; ``lba``/``uba`` (7) select kept (``[0, ∞)``), removed (``[0, 0]``) and ignored
-    rows, and the moment balance is ``[0, 0]``; ``f_n`` is bounded by the force limits through ``lbx``.
+    ``p = (θ_o, s_h, d, M, μ_h, l_h, vec(A), b)``; ``x = (f_n, f_t, τ, t, u)``; the objective is
+    ``gᵀx`` (minimised). The rows are the six cone rows ``s_j (b_j − n_jᵀw) − k_j t`` (``s_j = 1/l_h``
+    on torque rows, ``k_j = 1`` on kept rows), the moment balance, and ``u − f_n``, ``u + f_n`` (so
+    that ``u ≥ |f_n − f_nom|`` with ``−f_nom``, ``f_nom`` as their lower bounds); ``lba``/``uba`` (9)
+    select kept (``[0, ∞)``), removed (``[0, 0]``) and ignored rows, and the moment balance is
+    ``[0, 0]``; ``f_n`` is bounded by the force limits and ``t`` by a required margin through ``lbx``.
     """
     p = ca.SX.sym("p", _N_PARAMETERS)
     theta, s_h, d, moment, mu_h, l_h = (p[i] for i in range(6))
     ground_a, ground_b = ca.reshape(p[6:10], 2, 2), p[10:12]
     keep = ca.SX.sym("keep", N_CONE_ROWS)
-    x = ca.SX.sym("x", 4)
-    wrench, margin = x[:3], x[3]
+    x = ca.SX.sym("x", _N_UNKNOWNS)
+    wrench, margin, spread = x[:3], x[3], x[4]
     rows, bounds = contact.cone_rows(theta, mu_h, l_h, ground_a, ground_b)
     scale = ca.vertcat(1, 1, 1 / l_h, 1 / l_h, 1, 1)
     slack = scale * (bounds - rows @ wrench) - keep * margin
     hand_pose = contact.hand_pose_kinematics(theta, s_h, 0.0, d, 0.0)
     zero = ca.SX.zeros(2)
     balance = contact.equilibrium_residual(hand_pose, wrench, zero, zero, zero, zero)[2] + moment
-    constraints = ca.vertcat(slack, balance)
+    constraints = ca.vertcat(slack, balance, spread - wrench[0], spread + wrench[0])
     matrices = ca.Function(
         "statics_lp_matrices",
         [p, keep],
-        [ca.jacobian(constraints, x), ca.substitute(constraints, x, ca.SX.zeros(4))],
+        [ca.jacobian(constraints, x), ca.substitute(constraints, x, ca.SX.zeros(_N_UNKNOWNS))],
     )
     lp = ca.conic(
         "statics_lp_daqp",
         "daqp",
-        {"a": ca.Sparsity.dense(_N_ROWS, 4)},
+        {"a": ca.Sparsity.dense(_N_ROWS, _N_UNKNOWNS)},
         {"error_on_fail": False, "daqp": {"eps_prox": LP_PROXIMAL_WEIGHT}},
     )
     p_in, keep_in = ca.MX.sym("p", _N_PARAMETERS), ca.MX.sym("keep", N_CONE_ROWS)
+    objective = ca.MX.sym("g", _N_UNKNOWNS)
     lba, uba = ca.MX.sym("lba", _N_ROWS), ca.MX.sym("uba", _N_ROWS)
-    lbx, ubx = ca.MX.sym("lbx", 4), ca.MX.sym("ubx", 4)
+    lbx, ubx = ca.MX.sym("lbx", _N_UNKNOWNS), ca.MX.sym("ubx", _N_UNKNOWNS)
     a, offset = matrices(p_in, keep_in)
-    objective = ca.DM([0.0, 0.0, 0.0, -1.0])  # maximise t
     solution = lp(g=objective, a=ca.densify(a), lba=lba - offset, uba=uba - offset, lbx=lbx, ubx=ubx)
     residual = a @ solution["x"] + offset
     return ca.Function(
         "statics_lp",
-        [p_in, keep_in, lba, uba, lbx, ubx],
+        [p_in, keep_in, objective, lba, uba, lbx, ubx],
         [solution["x"], residual],
-        ["p", "keep", "lba", "uba", "lbx", "ubx"],
+        ["p", "keep", "g", "lba", "uba", "lbx", "ubx"],
         ["x", "rows"],
     )
 
@@ -213,13 +216,14 @@ def _solver() -> BufferedFunction:
 
 
 def _row_bounds(motion: Motion) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(keep, lba, uba)`` of the LP's rows for ``motion``."""
+    """``(keep, lba, uba)`` of the LP's rows for ``motion`` (the two ``|f_n − f_nom|`` rows' lower
+    bounds are set per call)."""
     kept = modes.kept_rows(motion)
     removed = np.zeros(N_CONE_ROWS, dtype=bool)
     removed[list(modes.REMOVED_ROWS[motion])] = True
     lower = np.where(kept | removed, 0.0, -np.inf)
     upper = np.where(removed, 0.0, np.inf)
-    return kept.astype(float), np.append(lower, 0.0), np.append(upper, 0.0)
+    return kept.astype(float), np.append(lower, [0.0, 0.0, 0.0]), np.append(upper, [0.0, np.inf, np.inf])
 
 
 _BOUNDS = {motion: _row_bounds(motion) for motion in Motion}
@@ -236,6 +240,37 @@ def parameters(statics: ObjectStatics, theta_o: float, s_h: float, l_h: float) -
     )
 
 
+_MAXIMISE_MARGIN = np.array([0.0, 0.0, 0.0, -1.0, 0.0])
+_NEAREST_FORCE = np.array([0.0, 0.0, 0.0, -0.01, 1.0])
+"""Minimise ``|f_n − f_nom|``, ties broken towards a larger margin (a newton of force off the nominal costs
+100 times a newton of margin, so the force stays as near as it can and the rest of the wrench is
+centred in the cone)."""
+
+
+def _solve(
+    statics: ObjectStatics,
+    configuration: tuple[float, float],
+    motion: Motion,
+    l_h: float,
+    force_limits: tuple[float, float],
+    objective: np.ndarray,
+    least_margin: float = -_BIG,
+    nominal_force: float = 0.0,
+) -> StaticsResult:
+    keep, lba, uba = _BOUNDS[motion]
+    lba = lba.copy()
+    lba[-2:] = (-nominal_force, nominal_force)
+    f_min, f_max = force_limits
+    lbx = np.array([f_min, -_BIG, -_BIG, least_margin, -_BIG])
+    ubx = np.array([f_max, _BIG, _BIG, _BIG, _BIG])
+    theta_o, s_h = configuration
+    p = parameters(statics, theta_o, s_h, l_h)
+    x, rows = _solver()(p, keep, objective, lba, uba, lbx, ubx)
+    if not _satisfied(x, rows, lba, uba, lbx, ubx):
+        return StaticsResult(-math.inf, None)
+    return StaticsResult(float(x[3]), np.array(x[:3]))
+
+
 def best_wrench(
     statics: ObjectStatics,
     theta_o: float,
@@ -249,15 +284,35 @@ def best_wrench(
     ``l_h`` is the torque rows' lever (m; the hand's half-length, or its estimate's effective one)
     and ``force_limits`` the normal force's ``(f_min, f_max)`` (N).
     """
+    return _solve(statics, (theta_o, s_h), Motion(motion), l_h, force_limits, _MAXIMISE_MARGIN)
+
+
+def regulation_wrench(
+    statics: ObjectStatics,
+    theta_o: float,
+    s_h: float,
+    motion: Motion | str,
+    l_h: float,
+    force_limits: tuple[float, float],
+    nominal_force: float,
+    margin_goal: float,
+) -> StaticsResult:
+    """The wrench a controller should hold for ``motion`` at ``(θ_o, s_h)``: the normal force nearest
+    ``nominal_force`` (N) among the wrenches whose margin is at least ``min(best, margin_goal)`` (N).
+
+    The largest margin alone presses as hard as the limits allow (every row grows with ``f_n``);
+    this keeps the margin the motion needs and no more force than that. The result's ``margin`` is
+    the margin required (``-inf`` where the motion is impossible at any force).
+    """
     motion = Motion(motion)
-    keep, lba, uba = _BOUNDS[motion]
-    f_min, f_max = force_limits
-    lbx = np.array([f_min, -_BIG, -_BIG, -_BIG])
-    ubx = np.array([f_max, _BIG, _BIG, _BIG])
-    x, rows = _solver()(parameters(statics, theta_o, s_h, l_h), keep, lba, uba, lbx, ubx)
-    if not _satisfied(x, rows, lba, uba, lbx, ubx):
-        return StaticsResult(-math.inf, None)
-    return StaticsResult(float(x[3]), np.array(x[:3]))
+    best = _solve(statics, (theta_o, s_h), motion, l_h, force_limits, _MAXIMISE_MARGIN)
+    if best.wrench is None:
+        return best
+    least = min(best.margin, margin_goal) - _FEASIBILITY_TOLERANCE
+    found = _solve(
+        statics, (theta_o, s_h), motion, l_h, force_limits, _NEAREST_FORCE, least, nominal_force
+    )
+    return StaticsResult(least, found.wrench) if found.wrench is not None else best
 
 
 def _satisfied(*arrays: np.ndarray) -> bool:

@@ -12,7 +12,7 @@ from ccopt.schedule import load_schedule
 def smoke_run():
     schedule = load_schedule("smoke")
     result = closed_loop.run(make_object("paper-triangle"), schedule, seed=3)
-    steps = [vars(step) for step in result.steps]
+    steps = [step.as_dict() for step in result.steps]
     summary = metrics.summarize(result.samples, steps, len(schedule.steps), result.sim_time, result.wall_time)
     return result, summary
 

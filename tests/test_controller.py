@@ -2,10 +2,11 @@
 
 import numpy as np
 import pytest
+from scipy.optimize import minimize_scalar
 
 from ccopt import contact
 from ccopt.contact import Row
-from ccopt.control.controller import Command, ControlInput, Controller, ControllerParams
+from ccopt.control.controller import Command, ControlInput, Controller, ControllerParams, quasi_static_maps
 from ccopt.hand import Hand
 from ccopt.modes import Motion
 
@@ -51,15 +52,49 @@ def test_pivot_moves_the_target_along_v_theta_and_keeps_sticking(controller, sig
     assert np.all(predicted_margins(output, current) > 0.0)  # every contact keeps its mode
 
 
-def test_hand_slide_drives_the_wrench_through_its_friction_face(controller):
-    current = state(wrench=(10.0, -4.0, 0.0))  # already leaning on the slide-positive face
+def test_the_predicted_wrench_is_the_quasi_static_equilibrium():
+    """``P Δx`` against a direct minimisation of the impedance's energy over the free pivot
+    ``q`` (hand pose ``x_h + v_θ q``): the equilibrium of a target change."""
+    stiffness = Hand().stiffness_in_hand_frame(THETA)
+    v_theta = contact.admissible_motions(THETA, S_H, D)[:, :1]
+    motion_map, wrench_map = quasi_static_maps(stiffness, v_theta, v_theta.T)
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        step = rng.normal(scale=[2e-3, 2e-3, 0.02])
+
+        def energy(q: float, step: np.ndarray = step) -> float:
+            spring = step - v_theta[:, 0] * q
+            return 0.5 * spring @ stiffness @ spring
+
+        q = minimize_scalar(energy, bounds=(-1.0, 1.0), method="bounded", options={"xatol": 1e-12}).x
+        np.testing.assert_allclose(motion_map @ step, [q], atol=1e-7)
+        np.testing.assert_allclose(wrench_map @ step, stiffness @ (step - v_theta[:, 0] * q), atol=1e-4)
+
+
+def test_a_tangential_push_turns_the_target_to_keep_the_moment_balanced(controller):
+    """Before a commanded hand slide begins, the controller pushes the wrench past the friction row
+    while the moment about the ground contact (``v_θ·w``) stays where it is: no roll."""
+    current = state(wrench=(10.0, -4.0, -0.2))
     goal = np.array([THETA, S_H + 0.01, S_G])
-    output = controller.update(current, Command(Motion.SLIDE_HAND_POS, goal))
-    margins = predicted_margins(output, current)
+    output = controller.update(current, Command(Motion.SLIDE_HAND_POS, goal, start=current.coordinates))
+    v_theta = contact.admissible_motions(THETA, S_H, D)[:, 0]
+    change = output.solution.wrench_change
+    assert change[1] < 0.0  # more tangential force the way the hand slides (f_t < 0 for ṡ_h > 0)
+    assert abs(v_theta @ change) < 1e-6 * np.linalg.norm(change)
+    assert np.all(np.delete(predicted_margins(output, current), Row.HAND_SLIDE_POS) > 0.0)
+
+
+def test_a_sliding_hand_moves_along_the_face_on_its_friction_boundary(controller):
+    rows, _ = contact.model_friction_cone(THETA, MU_H, MU_G, L_H, MASS)
+    on_face = (10.0, -MU_H * 10.0, -0.2)  # μ_h f_n + f_t = 0: sliding towards +s_h
+    current = state(wrench=on_face)
+    start = current.coordinates - np.array([0.0, 0.002, 0.0])  # it has slid 2 mm already
+    goal = np.array([THETA, S_H + 0.008, S_G])
+    output = controller.update(current, Command(Motion.SLIDE_HAND_POS, goal, start=start))
+    change = output.solution.wrench_change
+    assert rows[Row.HAND_SLIDE_POS] @ change == pytest.approx(0.0, abs=1e-6)  # stays on the face
     v_h = contact.admissible_motions(THETA, S_H, D)[:, 1]
     assert output.step @ v_h > 0.0
-    assert margins[Row.HAND_SLIDE_POS] < 0.0  # the removed row is crossed: the hand slides
-    assert np.all(np.delete(margins, Row.HAND_SLIDE_POS) > 0.0)  # the ground keeps sticking
 
 
 def test_normal_force_is_regulated_towards_its_target(controller):
@@ -77,7 +112,9 @@ def test_naive_v_theta_before_the_kinematics_are_known(controller):
     goal = np.array([THETA + 0.1, S_H, S_G])
     instance = controller.build_instance(current, Command(Motion.PIVOT, goal))
     naive = contact.admissible_motions(THETA, 0.0, controller.params.d_guess)[:, 0]
-    np.testing.assert_allclose(instance.directions[0], naive)
+    stiffness = Hand().stiffness_in_hand_frame(THETA)
+    expected = stiffness @ naive / (naive @ stiffness @ naive)  # Δq = vᵀKΔx / vᵀKv
+    np.testing.assert_allclose(instance.directions[0], expected)
 
 
 def test_bad_parameters_raise():

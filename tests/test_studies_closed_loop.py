@@ -49,7 +49,7 @@ def test_paper_trial_numbers_equal_a_direct_run(paper_study):
     schedule = load_schedule("smoke")
     obj = make_object(spec["object"], mu_hand=0.5, mu_ground=0.8)
     result = closed_loop.run(obj, schedule, LoopParams(), seed=spec["seed"])
-    steps = [vars(step) for step in result.steps]
+    steps = [step.as_dict() for step in result.steps]
     direct = metrics.summarize(result.samples, steps, len(schedule.steps), result.sim_time, result.wall_time)
     assert row["completed"] == direct["completed"]
     assert row["steps_done"] == direct["steps_done"]
@@ -181,7 +181,7 @@ def test_a_push_moves_the_object_the_way_it_pushes(direction):
         slide = perturbation.perturbation_trial(
             Push("s_g", 1, 1, 14.0, 0.15, 0.5, 1.0, "paper-triangle", "planar", 0)
         )
-        assert slide["peak_error"] > 2.0 and slide["contact_kept"]
+        assert slide["peak_error"] > 1e3 * metrics.SLIP_DISTANCE and slide["contact_kept"]  # it slid, mm
 
 
 def test_recovery_time_on_a_synthetic_trace():

@@ -118,7 +118,7 @@ def test_schedule_check_agrees_with_the_simulated_closed_loop():
     assert [c.feasible for c in checks] == [True, True, False]
     assert checks[2].on_face and checks[2].margin < 0.0
     result = closed_loop.run(obj, schedule, seed=0)
-    steps = [vars(step) for step in result.steps]
+    steps = [step.as_dict() for step in result.steps]
     ratios = metrics.realised_ratios(result.samples, steps)
     assert 0.85 < ratios[0] < 1.15  # the pivot
     failed_slide = ratios[1] < 0.85 or any(

@@ -1,28 +1,43 @@
 """The object-agnostic controller (paper §V–VI): estimate + commanded motion → ``Δx_tar``.
 
 Per control tick the controller builds one :class:`~ccopt.control.qp.QPInstance` in the hand frame
-``(n, t, θ)`` and solves it with the code-generated QP:
+``(n, t, θ)`` and solves it with the code-generated QP (paper eqs. 18–21), with one change of model
+that makes the QP respect the object's statics:
 
+What a target change does (the quasi-static prediction)
+    Under the commanded configuration the hand and the object move freely along the admissible
+    directions ``V`` (columns of :func:`ccopt.contact.admissible_motions`: ``v_θ`` always, and the
+    commanded slide's ``v_h`` or ``v_g`` once that contact slides) until they are in equilibrium
+    again. Equilibrium along ``v_θ`` is the moment balance about the ground contact
+    (``v_θ·w = −M(θ_o)``, unchanged by a small step); along a sliding direction the sliding contact
+    stays on its friction boundary (the removed row ``n_r·w = b_r``). With ``E`` these rows, a target
+    change ``Δx`` moves the hand by ``Δq = A Δx`` along ``V`` and changes the wrench by ``Δw = P Δx``::
+
+        A = (E K V)⁻¹ E K,        P = K (I − V A),        E P = 0.
+
+    The paper's QP predicts ``Δw = K Δx`` and measures motion as ``vᵢᵀΔx``: a tangential push then
+    carries an unbalanced moment, and a commanded hand slide turns into a roll. Here the QP predicts
+    only wrenches that balance along the admissible directions, and a held coordinate is held in
+    the stiffness metric (e.g. a slide's target turns by ``k d Δt / k_θ``, not ``d Δt``).
 Cost (paper eq. 21)
-    ``α₀‖Δx‖² + Σᵢ αᵢ (vᵢᵀΔx − βᵢ Δεᵢ)²`` over the admissible-motion vectors ``v_θ, v_h, v_g`` of
-    :func:`ccopt.contact.admissible_motions` at the estimated kinematics. The commanded coordinate's
-    error drives its term; the other admissible coordinates are *held* at their values when the step
-    began (their ``Δε`` is the drift since then), which the paper's cost does implicitly by keeping
-    them in the sum. Before the kinematics are known the paper's naive ``v_θ`` is used: ``s_h = 0``
-    and ``d = d_guess`` (paper §VI). A fourth term regulates the normal force towards a target
-    (``v = e_n``, ``δ = (f_target − f_n) / k_n``), which keeps the hand pressing.
+    ``α₀‖Δx‖² + Σᵢ αᵢ (aᵢᵀΔx − βᵢ Δεᵢ)²``: a row ``aᵢ`` of ``A`` per admitted coordinate of the motion
+    (:func:`ccopt.modes.admitted_coordinates`) that is free in the model; the commanded coordinate's
+    error drives its term, the others are held at their values when the step began. A normal-force
+    term ``(e_nᵀ P Δx − g Δf_n)²`` (scaled by ``k_n``) regulates ``f_n`` towards the force the statics
+    of the motion need (``ControlInput.force_target``, from :func:`ccopt.statics.regulation_wrench` on
+    the estimated parameters), else :attr:`ControllerParams.normal_force`. Before the commanded slide
+    has begun (its coordinate has not moved by :attr:`ControllerParams.slide_onset`), a push term
+    drives the removed row's value past its estimated bound (the true bound lies beyond the
+    conservative estimate), the moment kept balanced: the contact slides where the physics lets it.
+    Before the kinematics are known the paper's naive ``v_θ`` is used (``s_h = 0``, ``d = d_guess``).
 Rows (paper eq. 19)
-    The estimated cone rows ``nⱼᵀ(w + γⱼ K Δx) ≤ bⱼ − marginⱼ`` minus those the commanded motion
-    removes (:func:`ccopt.modes.kept_rows`), plus ``f_min ≤ f_n ≤ f_max``. Margins keep the kept
-    inequalities strict, as the paper requires for sticking and flush contact. Rows the estimator
-    has not estimated yet are not enforced: a cone built only from the wrenches seen so far would
-    keep the wrench where it has been and never let exploration widen it (the paper's exploration
-    learns each constraint by pushing towards it). The mode classifier stays conservative about
-    them; the controller relies on the exploration schedule to meet them first.
+    The estimated cone rows the commanded motion keeps (:func:`ccopt.modes.kept_rows`), with margins
+    relative to each row's width, on the predicted wrench ``w + P Δx``, plus ``f_min ≤ f_n ≤ f_max``.
+    Rows the estimator has not estimated yet are not enforced.
 
 The step is clipped to a maximum per tick (a target speed limit, :attr:`ControllerParams.max_speed`
-times the control period) and reported with the QP's
-diagnostics; an infeasible tick still returns the least-violating step and says so.
+times the control period) and reported with the QP's diagnostics; an infeasible tick still returns
+the least-violating step and says so.
 """
 
 from __future__ import annotations
@@ -71,6 +86,9 @@ class ControllerParams:
         min_margin: lower bound of the hand-row margins, N (× ``l_h`` for torques).
         d_guess: ``d`` of the naive ``v_θ`` before the kinematics are known, m.
         max_speed: largest impedance-target speed ``|Δn|, |Δt|`` (m/s) and ``|Δθ|`` (rad/s).
+        push_weight: ``α`` of the term that pushes a commanded slide's removed row past its bound.
+        push_force: how far past the estimated bound the push aims, N.
+        slide_onset: progress of a commanded slide (m) after which its contact counts as sliding.
     """
 
     regularization: float = 0.05
@@ -91,6 +109,9 @@ class ControllerParams:
         0.002 / PAPER_PERIOD,
         math.radians(1.0) / PAPER_PERIOD,
     )
+    push_weight: float = 0.5
+    push_force: float = 4.0
+    slide_onset: float = 0.001
 
     def __post_init__(self) -> None:
         for name in ("regularization", "convergence_rate", "force_rate", "d_guess", "normal_force"):
@@ -127,6 +148,8 @@ class ControlInput:
         kinematics_valid: whether ``s_h`` and ``d`` are estimated yet (else the naive ``v_θ``).
         coordinates: the ``(θ_o, s_h, s_g)`` that progress is measured on (rad, m, m), the same
             source as the command's targets.
+        force_target: the normal force the motion's statics need (N), None for the default.
+        tangential_target: the tangential force of the statics' wrench (N), None to hold it.
     """
 
     wrench: np.ndarray
@@ -140,6 +163,8 @@ class ControlInput:
     d: float
     kinematics_valid: bool
     coordinates: np.ndarray
+    force_target: float | None = None
+    tangential_target: float | None = None
 
 
 @dataclass(frozen=True)
@@ -147,11 +172,13 @@ class Command:
     """A commanded motion with its target coordinates ``(θ_o, s_h, s_g)`` (rad, m, m).
 
     ``targets`` holds the commanded coordinate's goal and the held coordinates' values at the start
-    of the step.
+    of the step; ``start`` the coordinates when the step began (None: the targets of the held ones,
+    and no slide counts as begun).
     """
 
     motion: Motion
     targets: np.ndarray
+    start: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -161,6 +188,18 @@ class ControlOutput:
     step: np.ndarray
     solution: QPSolution
     instance: QPInstance
+
+
+def quasi_static_maps(
+    stiffness: np.ndarray, free_directions: np.ndarray, balance: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(A, P)``: the motion ``Δq = A Δx`` along the free directions ``V`` (3×k, hand frame) and the
+    wrench change ``Δw = P Δx`` that a target change ``Δx`` causes once the hand and the object are
+    in equilibrium again, with ``E Δw = 0`` for the equilibrium rows ``E`` (k×3): ``A = (E K V)⁻¹ E K``,
+    ``P = K (I − V A)`` (see the module docstring)."""
+    coupling = balance @ stiffness
+    motion_map = np.linalg.solve(coupling @ free_directions, coupling)
+    return motion_map, stiffness @ (np.eye(3) - free_directions @ motion_map)
 
 
 class Controller:
@@ -202,30 +241,45 @@ class Controller:
     def build_instance(self, state: ControlInput, command: Command) -> QPInstance:
         """The QP of this tick (exposed for studies and tests)."""
         p = self.params
-        if state.kinematics_valid:
-            vectors = contact.admissible_motions(state.hand_angle, state.s_h, state.d)
-        else:
-            vectors = contact.admissible_motions(state.hand_angle, 0.0, p.d_guess)
+        stiffness = self.hand.stiffness_in_hand_frame(state.hand_angle)
+        s_h, d = (state.s_h, state.d) if state.kinematics_valid else (0.0, p.d_guess)
+        vectors = contact.admissible_motions(state.hand_angle, s_h, d)
+        free, balance = self._model(state, command, vectors)
+        motion_map, wrench_map = quasi_static_maps(stiffness, vectors[:, free], balance)
         errors = np.asarray(command.targets) - np.asarray(state.coordinates)
         regulated = modes.driven_coordinate(command.motion)
         directions, weights, targets = [], [], []
-        for k in modes.admitted_coordinates(command.motion):
-            directions.append(vectors[:, k])
+        for row, k in enumerate(free):
+            directions.append(motion_map[row])
             weights.append(p.weights[k] if k == regulated else p.hold_weights[k])
             targets.append(self._convergence * errors[k])
-        f_n = state.wrench[0]
-        stiffness = self.hand.stiffness_in_hand_frame(state.hand_angle)
         k_n = stiffness[0, 0]
-        directions.append(np.array([1.0, 0.0, 0.0]))
+        f_n = state.wrench[0]
+        force_target = p.normal_force if state.force_target is None else state.force_target
+        directions.append(wrench_map[0] / k_n)  # predicted Δf_n / k_n, m
         weights.append(p.force_weight)
-        targets.append(self._force_gain * (p.normal_force - f_n) / k_n)  # a displacement along e_n, m
+        targets.append(self._force_gain * (force_target - f_n) / k_n)
+        removed = modes.REMOVED_ROWS[command.motion]
+        if not removed:  # hold the tangential force where the statics want it (or where it is)
+            k_t = stiffness[1, 1]
+            f_t_target = state.wrench[1] if state.tangential_target is None else state.tangential_target
+            directions.append(wrench_map[1] / k_t)
+            weights.append(p.force_weight)
+            targets.append(self._force_gain * (f_t_target - state.wrench[1]) / k_t)
+        elif len(free) == 1:  # the commanded slide has not begun: push past its bound
+            row = state.cone_rows[removed[0]]
+            scale = k_n * float(np.linalg.norm(row))
+            excess = state.cone_bounds[removed[0]] + p.push_force - float(row @ state.wrench)
+            directions.append((row @ wrench_map) / scale)  # predicted Δ(n_r·w) / (k_n |n_r|), m
+            weights.append(p.push_weight)
+            targets.append(self._force_gain * excess / scale)
         margins = self._margins(f_n, state)
         f_min, f_max = self.hand.force_limits
         rows = np.vstack([state.cone_rows, [[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]]])
         bounds = np.concatenate([state.cone_bounds - margins, [f_max, -f_min]])
         active = np.concatenate([modes.kept_rows(command.motion) & state.row_valid, [True, True]])
         return QPInstance(
-            stiffness=stiffness,
+            stiffness=wrench_map,
             wrench=np.asarray(state.wrench, dtype=float),
             rows=rows,
             bounds=bounds,
@@ -236,6 +290,26 @@ class Controller:
             weights=np.asarray(weights),
             targets=np.asarray(targets),
         )
+
+    def _model(
+        self, state: ControlInput, command: Command, vectors: np.ndarray
+    ) -> tuple[list[int], np.ndarray]:
+        """The coordinates free in the prediction and their equilibrium rows ``E`` (hand frame).
+
+        ``θ_o`` is always free, balanced by the moment about the ground contact (``v_θ``). A commanded
+        slide's coordinate joins once the slide has begun (moved by ``slide_onset`` the commanded way
+        since the step began), held on its friction boundary by the removed row.
+        """
+        free, balance = [modes.THETA_O], [vectors[:, modes.THETA_O]]
+        driven = modes.driven_coordinate(command.motion)
+        removed = modes.REMOVED_ROWS[command.motion]
+        if removed and command.start is not None:
+            delta = command.targets[driven] - command.start[driven]
+            progress = (state.coordinates[driven] - command.start[driven]) * math.copysign(1.0, delta)
+            if progress >= self.params.slide_onset:
+                free.append(driven)
+                balance.append(state.cone_rows[removed[0]])
+        return free, np.asarray(balance)
 
     def _margins(self, f_n: float, state: ControlInput) -> np.ndarray:
         """Per-row margins ``b − margin``: strict inequalities for the rows the command keeps."""
