@@ -26,6 +26,7 @@ import numpy as np
 
 from ccopt import geometry, validation
 from ccopt.control.controller import Command, ControlInput, Controller, ControllerParams
+from ccopt.control.targets import UNJUDGED, StaticsTarget, statics_target
 from ccopt.estimation.estimator import Estimate, Estimator, EstimatorParams
 from ccopt.hand import Hand
 from ccopt.modes import MOTION_CODES
@@ -165,14 +166,20 @@ _FROM_ESTIMATE = ("wrench", "cone_rows", "cone_bounds", "row_valid", "mu_h", "s_
 """The fields a :class:`ControlInput` takes from the :class:`Estimate` as they are."""
 
 
-def control_input(estimate: Estimate, hand_pose: np.ndarray, coordinates: np.ndarray) -> ControlInput:
-    """What the controller reads from an estimate, the measured hand pose and the progress source."""
+def control_input(
+    estimate: Estimate, hand_pose: np.ndarray, coordinates: np.ndarray, target: StaticsTarget = UNJUDGED
+) -> ControlInput:
+    """What the controller reads from an estimate, the measured hand pose, the progress source and the
+    estimated statics' target."""
     return ControlInput(
         **{name: getattr(estimate, name) for name in _FROM_ESTIMATE},
         l_h=estimate.torque_lever,
         hand_angle=float(hand_pose[2]),
         kinematics_valid=kinematics_usable(estimate),
         coordinates=coordinates,
+        force_target=target.force,
+        tangential_target=target.tangential,
+        statics_margin=target.margin if target.force is not None else None,
     )
 
 
@@ -244,7 +251,7 @@ class _StepTracker:
         if self.step.coordinate is not None:
             targets[self.step.coordinate] += self.step.delta
         self._nominal = targets.copy()
-        self.command = Command(self.step.motion, targets, start=current)
+        self.command = Command(self.step.motion, targets, start=current, wrench=np.array(estimate.wrench))
         self.start_time = now
         self._within_since = None
 
@@ -331,7 +338,13 @@ def run(
                 coordinates = tracker.coordinates(estimate, hand_pose)
                 if coordinates is None:  # the estimate is unusable: hold where the command says
                     coordinates = tracker.command.targets
-                output = controller.update(control_input(estimate, hand_pose, coordinates), tracker.command)
+                p = params.controller_params
+                aim = statics_target(
+                    estimate, float(hand_pose[2]), tracker.command.motion, params.hand.force_limits,
+                    p.normal_force, p.statics_margin,
+                )
+                state = control_input(estimate, hand_pose, coordinates, aim)
+                output = controller.update(state, tracker.command)
                 last_slack, last_feasible = output.solution.slack, output.solution.feasible
                 velocity = geometry.twist_hand_to_world(hand_pose[2], output.step) / controller.period
                 if on_tick is not None:

@@ -98,6 +98,7 @@ class Region:
 
     Attributes:
         output: the controller's output (instance, solution).
+        scale: the QP variable's units in plotting units (the solution ``y`` plots as ``y · scale``).
         rows: ``A`` of the active rows (k×3), in plotting units.
         upper: their ``ub`` (k,).
         vertices: vertices of the feasible polytope (plotting units), ``None`` if empty.
@@ -110,6 +111,7 @@ class Region:
     """
 
     output: ControlOutput
+    scale: np.ndarray
     rows: np.ndarray
     upper: np.ndarray
     vertices: np.ndarray | None
@@ -210,18 +212,21 @@ def compute_region(state: RegionState, controller: Controller) -> Region:
     _, _, rows, upper = (np.asarray(m) for m in QP_MATRICES(instance.packed))
     upper = upper.ravel()
     used = np.linalg.norm(rows[:, :3], axis=1) > 0.0  # inactive rows are 0·Δx − t ≤ 1
-    rows_plot, upper_plot = rows[used, :3] / PLOT_SCALE, upper[used]
+    scale = PLOT_SCALE * controller.step_units  # the QP's variable to the plot's mm, mm, deg
+    rows_plot, upper_plot = rows[used, :3] / scale, upper[used]
     box_rows, box_upper = _box_rows(BOX)
     all_rows, all_upper = np.vstack([rows_plot, box_rows]), np.concatenate([upper_plot, box_upper])
     vertices = halfspace_vertices(all_rows, all_upper)
     clipped = vertices is not None and bool(np.any(np.isclose(np.abs(vertices), BOX, rtol=1e-9)))
     vectors = contact.admissible_motions(state.theta_o, state.s_h, state.d)
     direction = vectors[:, _commanded(state.motion)]
-    term = int(np.argmin(np.linalg.norm(instance.directions - direction, axis=1)))
+    aligned = np.abs(instance.directions @ (direction / controller.step_units))
+    term = int(np.argmax(aligned / np.linalg.norm(instance.directions, axis=1)))  # the motion's term
     target = float(instance.targets[term])
-    plane = plane_section(all_rows, all_upper, direction / PLOT_SCALE, target)
+    plane = plane_section(all_rows, all_upper, instance.directions[term] / scale, target)
     return Region(
         output,
+        scale,
         rows_plot,
         upper_plot,
         vertices,
@@ -306,7 +311,7 @@ def region_figure(path: Path, state: RegionState, region: Region) -> None:
 
     figure = Figure(figsize=(7, 6), layout="constrained")
     ax = figure.add_subplot(projection="3d")
-    solution = region.output.solution.step * PLOT_SCALE
+    solution = region.output.solution.step * region.scale
     extent = 1.0
     if region.vertices is not None:
         faces = polytope_faces(np.vstack([region.rows, _box_rows(BOX)[0]]), region.vertices)
@@ -434,7 +439,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         "clipped": region.clipped,
     }
     write_json(args.out / "results.json", runner.json_ready(summary))
-    step = solution.step * PLOT_SCALE
+    step = solution.step * region.scale
     rows = [
         ("QP feasible", str(solution.feasible)),
         ("step Δn, Δt, Δθ", f"{step[0]:.3f} mm, {step[1]:.3f} mm, {step[2]:.3f}°"),

@@ -114,7 +114,8 @@ def test_naive_v_theta_before_the_kinematics_are_known(controller):
     naive = contact.admissible_motions(THETA, 0.0, controller.params.d_guess)[:, 0]
     stiffness = Hand().stiffness_in_hand_frame(THETA)
     expected = stiffness @ naive / (naive @ stiffness @ naive)  # Δq = vᵀKΔx / vᵀKv
-    np.testing.assert_allclose(instance.directions[0], expected)
+    units = controller.step_units  # the QP's variable y: Δx = units · y; θ in angle units
+    np.testing.assert_allclose(instance.directions[0], expected * units / controller.params.angle_unit)
 
 
 def test_bad_parameters_raise():

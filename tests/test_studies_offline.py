@@ -59,7 +59,7 @@ def test_qp_solution_lies_in_the_drawn_region():
     from ccopt.control.controller import Controller
 
     region = qp_region.compute_region(qp_region.RegionState(), Controller())
-    step = region.output.solution.step * qp_region.PLOT_SCALE
+    step = region.output.solution.step * region.scale
     assert np.all(region.rows @ step <= region.upper + 1e-6)
     lows, highs = region.vertices.min(axis=0), region.vertices.max(axis=0)
     assert np.all(step >= lows - 1e-6) and np.all(step <= highs + 1e-6)

@@ -35,9 +35,12 @@ Rows (paper eq. 19)
     relative to each row's width, on the predicted wrench ``w + P Δx``, plus ``f_min ≤ f_n ≤ f_max``.
     Rows the estimator has not estimated yet are not enforced.
 
-The step is clipped to a maximum per tick (a target speed limit, :attr:`ControllerParams.max_speed`
-times the control period) and reported with the QP's diagnostics; an infeasible tick still returns
-the least-violating step and says so.
+The QP's variable is the step in task units (:attr:`ControllerParams.length_unit`, ``angle_unit``), and its
+terms are errors in those units and in newtons, so that a millimetre, a degree and a newton weigh alike.
+The step is scaled down to a maximum per tick (a target speed limit, :attr:`ControllerParams.max_speed`
+times the control period; scaled as a whole, so that it keeps the direction that balances the wrench)
+and reported with the QP's diagnostics; an infeasible tick still returns the least-violating step and
+says so.
 """
 
 from __future__ import annotations
@@ -89,6 +92,13 @@ class ControllerParams:
         push_weight: ``α`` of the term that pushes a commanded slide's removed row past its bound.
         push_force: how far past the estimated bound the push aims, N.
         slide_onset: progress of a commanded slide (m) after which its contact counts as sliding.
+        statics_margin: margin (N) the regulation wrench of a motion keeps on its rows, where the
+            estimated statics allow it (:func:`ccopt.statics.regulation_wrench`).
+        statics_margin_share: the share of that margin the QP's rows keep at most (the rows' own
+            margins above apply where they are smaller).
+        length_unit, angle_unit, force_unit: the units in which the QP weighs its terms and its
+            step (m, rad, N): an error of one unit costs its weight, a step of one unit the
+            regularisation. A millimetre, a degree and a newton: the scales the task is judged on.
     """
 
     regularization: float = 0.05
@@ -112,6 +122,11 @@ class ControllerParams:
     push_weight: float = 0.5
     push_force: float = 4.0
     slide_onset: float = 0.001
+    statics_margin: float = 3.0
+    statics_margin_share: float = 0.5
+    length_unit: float = 1e-3
+    angle_unit: float = math.radians(1.0)
+    force_unit: float = 1.0
 
     def __post_init__(self) -> None:
         for name in ("regularization", "convergence_rate", "force_rate", "d_guess", "normal_force"):
@@ -149,7 +164,10 @@ class ControlInput:
         coordinates: the ``(θ_o, s_h, s_g)`` that progress is measured on (rad, m, m), the same
             source as the command's targets.
         force_target: the normal force the motion's statics need (N), None for the default.
-        tangential_target: the tangential force of the statics' wrench (N), None to hold it.
+        tangential_target: the tangential force of the statics' wrench (N), None to hold the one at
+            the start of the step.
+        statics_margin: the margin the statics' wrench keeps on the rows (N, torque rows over
+            ``l_h``), None where the statics are not known.
     """
 
     wrench: np.ndarray
@@ -165,6 +183,7 @@ class ControlInput:
     coordinates: np.ndarray
     force_target: float | None = None
     tangential_target: float | None = None
+    statics_margin: float | None = None
 
 
 @dataclass(frozen=True)
@@ -173,12 +192,14 @@ class Command:
 
     ``targets`` holds the commanded coordinate's goal and the held coordinates' values at the start
     of the step; ``start`` the coordinates when the step began (None: the targets of the held ones,
-    and no slide counts as begun).
+    and no slide counts as begun); ``wrench`` the measured wrench then (N, N·m; None: unknown), which
+    the tangential force is held at where the statics give no target.
     """
 
     motion: Motion
     targets: np.ndarray
     start: np.ndarray | None = None
+    wrench: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -188,6 +209,27 @@ class ControlOutput:
     step: np.ndarray
     solution: QPSolution
     instance: QPInstance
+
+
+def _row_units(lever: float) -> np.ndarray:
+    """Per-row factor turning a margin in N into the row's units (torque rows: × ``l_h``)."""
+    scale = np.ones(N_CONE_ROWS)
+    scale[[Row.HAND_PIVOT_POS, Row.HAND_PIVOT_NEG]] = lever
+    return scale
+
+
+class _Terms:
+    """The tracking terms ``α (dᵀΔx − δ)²`` of one QP, collected in order."""
+
+    def __init__(self) -> None:
+        self.directions: list[np.ndarray] = []
+        self.weights: list[float] = []
+        self.targets: list[float] = []
+
+    def add(self, direction: np.ndarray, weight: float, target: float) -> None:
+        self.directions.append(direction)
+        self.weights.append(weight)
+        self.targets.append(target)
 
 
 def quasi_static_maps(
@@ -228,14 +270,24 @@ class Controller:
         self._convergence = 1.0 - math.exp(-self.params.convergence_rate * self.period)
         self._force_gain = 1.0 - math.exp(-self.params.force_rate * self.period)
         self._max_step = np.asarray(self.params.max_speed) * self.period
+        p = self.params
+        self._units = np.array([p.length_unit, p.length_unit, p.angle_unit])
         self._row_gains = np.full(N_CONE_ROWS + 2, self.params.row_gains)
         self._row_gains[N_CONE_ROWS:] = 1.0
+
+    @property
+    def step_units(self) -> np.ndarray:
+        """The units of the QP's variable ``y`` (m, m, rad): the target change is ``Δx = step_units · y``."""
+        return self._units.copy()
 
     def update(self, state: ControlInput, command: Command) -> ControlOutput:
         """The hand-frame change of the impedance target ``(Δn, Δt, Δθ)`` (m, m, rad) for this tick."""
         instance = self.build_instance(state, command)
         solution = self.solver.solve(instance)
-        step = np.clip(solution.step, -self._max_step, self._max_step)
+        step = self._units * solution.step  # the QP's variable is the step in task units
+        excess = np.max(np.abs(step) / self._max_step)
+        step = step / excess if excess > 1.0 else step  # scaled, not clipped: the step keeps its
+        # direction, and with it the balance of the wrench it predicts
         return ControlOutput(step=step, solution=solution, instance=instance)
 
     def build_instance(self, state: ControlInput, command: Command) -> QPInstance:
@@ -248,47 +300,44 @@ class Controller:
         motion_map, wrench_map = quasi_static_maps(stiffness, vectors[:, free], balance)
         errors = np.asarray(command.targets) - np.asarray(state.coordinates)
         regulated = modes.driven_coordinate(command.motion)
-        directions, weights, targets = [], [], []
+        terms = _Terms()
         for row, k in enumerate(free):
-            directions.append(motion_map[row])
-            weights.append(p.weights[k] if k == regulated else p.hold_weights[k])
-            targets.append(self._convergence * errors[k])
-        k_n = stiffness[0, 0]
+            unit = p.angle_unit if k == modes.THETA_O else p.length_unit
+            weight = p.weights[k] if k == regulated else p.hold_weights[k]
+            terms.add(motion_map[row] / unit, weight, self._convergence * errors[k] / unit)
         f_n = state.wrench[0]
         force_target = p.normal_force if state.force_target is None else state.force_target
-        directions.append(wrench_map[0] / k_n)  # predicted Δf_n / k_n, m
-        weights.append(p.force_weight)
-        targets.append(self._force_gain * (force_target - f_n) / k_n)
+        change = self._force_gain * (force_target - f_n)
+        terms.add(wrench_map[0] / p.force_unit, p.force_weight, change / p.force_unit)
         removed = modes.REMOVED_ROWS[command.motion]
         if not removed:  # hold the tangential force where the statics want it (or where it is)
-            k_t = stiffness[1, 1]
-            f_t_target = state.wrench[1] if state.tangential_target is None else state.tangential_target
-            directions.append(wrench_map[1] / k_t)
-            weights.append(p.force_weight)
-            targets.append(self._force_gain * (f_t_target - state.wrench[1]) / k_t)
+            f_t_target = state.tangential_target
+            if f_t_target is None:
+                f_t_target = state.wrench[1] if command.wrench is None else command.wrench[1]
+            change = self._force_gain * (f_t_target - state.wrench[1])
+            terms.add(wrench_map[1] / p.force_unit, p.force_weight, change / p.force_unit)
         elif len(free) == 1:  # the commanded slide has not begun: push past its bound
             row = state.cone_rows[removed[0]]
-            scale = k_n * float(np.linalg.norm(row))
+            scale = p.force_unit * float(np.linalg.norm(row))
             excess = state.cone_bounds[removed[0]] + p.push_force - float(row @ state.wrench)
-            directions.append((row @ wrench_map) / scale)  # predicted Δ(n_r·w) / (k_n |n_r|), m
-            weights.append(p.push_weight)
-            targets.append(self._force_gain * excess / scale)
+            terms.add((row @ wrench_map) / scale, p.push_weight, self._force_gain * excess / scale)
         margins = self._margins(f_n, state)
         f_min, f_max = self.hand.force_limits
         rows = np.vstack([state.cone_rows, [[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]]])
         bounds = np.concatenate([state.cone_bounds - margins, [f_max, -f_min]])
         active = np.concatenate([modes.kept_rows(command.motion) & state.row_valid, [True, True]])
+        units = self._units  # the QP's variable y is the step in task units: Δx = units · y
         return QPInstance(
-            stiffness=wrench_map,
+            stiffness=wrench_map * units,
             wrench=np.asarray(state.wrench, dtype=float),
             rows=rows,
             bounds=bounds,
             gains=self._row_gains,
             active=active,
             regularization=p.regularization,
-            directions=np.asarray(directions),
-            weights=np.asarray(weights),
-            targets=np.asarray(targets),
+            directions=np.asarray(terms.directions) * units,
+            weights=np.asarray(terms.weights),
+            targets=np.asarray(terms.targets),
         )
 
     def _model(
@@ -323,4 +372,9 @@ class Controller:
         margins[[Row.HAND_PIVOT_POS, Row.HAND_PIVOT_NEG]] = (
             max(p.torque_margin * force, p.min_margin) * state.l_h
         )
+        if state.statics_margin is not None and math.isfinite(state.statics_margin):
+            # the statics' wrench keeps this margin on every row (N; torque rows over l_h): keep the
+            # QP's rows no stricter, so that the QP can reach it
+            share = max(p.statics_margin_share * state.statics_margin, p.min_margin)
+            margins = np.minimum(margins, share * _row_units(state.l_h))
         return margins

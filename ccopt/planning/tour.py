@@ -1,0 +1,136 @@
+"""A long schedule of possible steps on a known object: the experimenter's tool for closed-loop tests.
+
+:func:`possible_tour` walks the :class:`~ccopt.planning.graph.ConfigurationGraph` of the object's *true*
+statics from where a run starts: pivots both ways first (the kinematics need them), then, in turn, the
+nearest hand slide and the nearest ground slide of the way not done last (reached through pivots and
+hand slides the statics allow with margin), pivots in between, until the schedule is long enough. A
+kind of slide the object allows nowhere in reach is left out, and :class:`Tour` says so. Every step of
+the result is possible with margin by construction (the oracle of :func:`ccopt.statics.schedule_feasibility`
+agrees up to its own margin).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from ccopt.planning.graph import ConfigurationGraph, Edge, Node
+from ccopt.schedule import Schedule, Step, hold
+
+SLIDE_KINDS = ("slide_hand", "slide_ground")
+
+
+@dataclass(frozen=True)
+class Tour:
+    """A schedule of possible steps and what the object allowed.
+
+    Attributes:
+        schedule: the steps.
+        allowed: per slide kind and sign, how many distinct edges of it the graph reachable from the
+            start holds (``{"slide_hand": {1: n, -1: m}, ...}``).
+        counts: the number of steps of each kind in the schedule.
+    """
+
+    schedule: Schedule
+    allowed: dict[str, dict[int, int]]
+    counts: dict[str, int] = field(default_factory=dict)
+
+
+def reachable_nodes(graph: ConfigurationGraph, source: Node, limit: int = 2000) -> set[Node]:
+    """Every node reachable from ``source`` through pivots and hand slides (breadth first)."""
+    seen, queue = {source}, [source]
+    while queue and len(seen) < limit:
+        node = queue.pop()
+        for edge in graph.edges(node):
+            if edge.target not in seen:
+                seen.add(edge.target)
+                queue.append(edge.target)
+    return seen
+
+
+def allowed_slides(graph: ConfigurationGraph, nodes: set[Node]) -> dict[str, dict[int, int]]:
+    """How many distinct slide edges of each kind and sign the nodes hold."""
+    found: dict[str, dict[int, int]] = {kind: {1: 0, -1: 0} for kind in SLIDE_KINDS}
+    for node in nodes:
+        for edge in graph.edges(node):
+            if edge.kind in SLIDE_KINDS:
+                found[edge.kind][int(math.copysign(1, edge.delta))] += 1
+    return found
+
+
+def _as_step(edge: Edge, timeout: float) -> Step:
+    tolerance = math.radians(0.5) if edge.kind == "pivot" else 0.0015
+    return Step(edge.kind, edge.delta, tolerance, timeout)
+
+
+def possible_tour(
+    graph: ConfigurationGraph,
+    steps: int = 32,
+    slides: int = 4,
+    name: str = "possible-tour",
+    timeout: float = 10.0,
+    ground_span: float = 0.03,
+) -> Tour:
+    """At least ``steps`` possible steps from the graph's start with up to ``slides`` hand slides and
+    ``slides`` ground slides (alternating their way where both ways exist), or as many as the object
+    allows; ``s_g`` is kept within ``±ground_span`` (m) of its start."""
+    node = Node(0, 0)
+    reach = reachable_nodes(graph, node)
+    allowed = allowed_slides(graph, reach)
+    edges: list[Edge] = []
+    for sign in (1, -1, -1, 1):  # exploration: the kinematics need the object turned both ways
+        pivot = next((e for e in graph.edges(node) if e.kind == "pivot" and e.delta * sign > 0), None)
+        if pivot is not None:
+            edges.append(pivot)
+            node = pivot.target
+    done = {kind: 0 for kind in SLIDE_KINDS}
+    way = {kind: 1 for kind in SLIDE_KINDS}
+    s_g = 0.0
+    stuck = 0
+    def wanting() -> bool:
+        return len(edges) < steps or any(done[k] < slides and sum(allowed[k].values()) for k in SLIDE_KINDS)
+
+    while wanting() and stuck < 4:
+        progressed = False
+        for kind in SLIDE_KINDS:
+            if done[kind] >= slides or not sum(allowed[kind].values()):
+                continue
+            for sign in (way[kind], -way[kind]):
+                if kind == "slide_ground" and abs(s_g + sign * graph.params.ground_slide) > ground_span:
+                    continue
+                route = _route_to_slide(graph, node, kind, sign)
+                if route is None:
+                    continue
+                edges.extend(route)
+                node = route[-1].target
+                if kind == "slide_ground":
+                    s_g += route[-1].delta
+                done[kind] += 1
+                way[kind] = -sign
+                progressed = True
+                break
+        if len(edges) < steps:
+            pivot = next((e for e in graph.edges(node) if e.kind == "pivot"), None)
+            if pivot is not None:
+                edges.append(pivot)
+                node = pivot.target
+                progressed = True
+        stuck = 0 if progressed else stuck + 1
+    schedule = Schedule(name, (hold(0.5), *(_as_step(edge, timeout) for edge in edges), hold(0.5)))
+    counts = {kind: sum(edge.kind == kind for edge in edges) for kind in ("pivot", *SLIDE_KINDS)}
+    return Tour(schedule, allowed, counts)
+
+
+def _route_to_slide(graph: ConfigurationGraph, source: Node, kind: str, sign: int) -> list[Edge] | None:
+    """Pivots and hand slides to the nearest node with a slide of ``kind`` and ``sign``, then the slide."""
+
+    def slide_from(node: Node) -> Edge | None:
+        return next(
+            (e for e in graph.edges(node) if e.kind == kind and math.copysign(1, e.delta) == sign), None
+        )
+
+    path = graph.shortest_path(source, lambda node: slide_from(node) is not None)
+    if path is None:
+        return None
+    end = path[-1].target if path else source
+    return [*path, slide_from(end)]
