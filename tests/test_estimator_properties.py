@@ -93,7 +93,7 @@ def assert_valid_parts_finite(estimate: Estimate) -> None:
 @EXAMPLES
 @given(streams(), st.booleans())
 def test_any_finite_stream_gives_finite_or_flagged_invalid_estimates(stream, quick: bool) -> None:
-    estimator = Estimator(QUICK if quick else None)
+    estimator = Estimator(params=QUICK if quick else None)
     for time, pose, wrench in stream:
         assert_valid_parts_finite(estimator.update(time, pose, wrench))
 
@@ -115,7 +115,7 @@ junk = st.one_of(
 @EXAMPLES
 @given(st.one_of(any_finite, junk), st.one_of(st.lists(any_finite, min_size=3, max_size=3), junk), junk)
 def test_bad_input_raises_only_value_or_type_errors(time, pose, wrench) -> None:
-    estimator = Estimator(QUICK)
+    estimator = Estimator(params=QUICK)
     estimator.update(0.0, [0.0, 0.1, 0.0], [10.0, 1.0, 0.0])
     for arguments in ((time, pose, wrench), (time, wrench, pose)):
         with contextlib.suppress(ValueError, TypeError):
@@ -136,8 +136,9 @@ def clean_run() -> tuple[list[tuple[float, np.ndarray, np.ndarray]], list[bytes]
     estimator, states, estimates = Estimator(), [], []
     for time, pose, wrench in stream:
         states.append(pickle.dumps(estimator))
-        estimates.append(fingerprint(estimator.update(time, pose, wrench)))
-    assert estimator._last.row_valid.all() and estimator._last.kinematics_valid  # it reaches everything
+        last = estimator.update(time, pose, wrench)
+        estimates.append(fingerprint(last))
+    assert last.row_valid.all() and last.kinematics_valid  # the stream reaches every estimate
     return stream, states, estimates
 
 

@@ -237,7 +237,7 @@ class Estimator:
         wrench.flags.writeable = False
         row_valid.flags.writeable = False
         self._last = Estimate(
-            time=time,
+            time=float(time),
             wrench=wrench,
             cone_rows=cone_rows,
             cone_bounds=cone_bounds,
@@ -282,7 +282,7 @@ class Estimator:
     def _skip(self, time: float) -> Estimate:
         if self._last is None:
             return _empty_estimate(time, self.friction, self.ground)
-        return dataclasses.replace(self._last, time=time, skipped=True)
+        return dataclasses.replace(self._last, time=float(time), skipped=True)
 
 
 def kinematic_modes(modes: ContactConfiguration, ground: GroundCone) -> ContactConfiguration:
