@@ -42,23 +42,26 @@ estimator's quantiles are built to ignore a few outliers).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from numpy.typing import ArrayLike
 
 from ccopt.estimation.quantile import check_count, check_number
-from ccopt.plant.base import PlantParams
 
 OK = "ok"
 FAULT_NAMES = ("dead", "stuck", "implausible", "pose_lost")
 """The faults :class:`SensorHealth` reports, besides :data:`OK`."""
 _TIME_TOLERANCE = 1e-9
 """Durations are compared with this slack (s)."""
+CRITICAL_DAMPING = 2.0 * math.sqrt(2000.0 * 1.0)
+"""N·s/m: critical damping of the default 1 kg hand on 2000 N/m, the plants' default impedance."""
 
 
 @dataclass(frozen=True)
 class HealthParams:
     """What the robot knows of its impedance and sensors, and the fault thresholds.
+
+    The defaults are the plants' default hand; :meth:`from_impedance` takes the robot's own.
 
     Attributes:
         stiffness: impedance ``K`` (N/m, N/m, N·m/rad), world axes at the hand-face centre.
@@ -75,8 +78,8 @@ class HealthParams:
         max_torque: range of the F/T sensor's torque, N·m.
     """
 
-    stiffness: tuple[float, float, float] = field(default_factory=lambda: PlantParams().K)
-    damping: tuple[float, float, float] = field(default_factory=lambda: PlantParams().D)
+    stiffness: tuple[float, float, float] = (2000.0, 2000.0, 60.0)
+    damping: tuple[float, float, float] = (CRITICAL_DAMPING, CRITICAL_DAMPING, 0.3)
     filter_time: float = 0.03
     force_tolerance: float = 4.0
     force_ratio: float = 0.1
@@ -102,9 +105,12 @@ class HealthParams:
         object.__setattr__(self, "stuck_samples", check_count("stuck_samples", self.stuck_samples, low=2))
 
     @classmethod
-    def for_plant(cls, plant: PlantParams, **thresholds: float) -> HealthParams:
-        """The impedance of ``plant`` (``K`` and ``D``) with default or given thresholds."""
-        return cls(stiffness=plant.K, damping=plant.D, **thresholds)
+    def from_impedance(
+        cls, stiffness: tuple[float, float, float], damping: tuple[float, float, float], **thresholds: float
+    ) -> HealthParams:
+        """The robot's own impedance ``K`` and ``D`` (the hand's or plant's, world axes) with default or
+        given thresholds."""
+        return cls(stiffness=tuple(stiffness), damping=tuple(damping), **thresholds)
 
 
 @dataclass(frozen=True)

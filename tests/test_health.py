@@ -10,11 +10,13 @@ import pytest
 from ccopt import closed_loop, geometry
 from ccopt.health import FAULT_NAMES, OK, HealthParams, SensorHealth
 from ccopt.objects import make_object
-from ccopt.plant.base import PlantParams
 from ccopt.plant.sensors import SensorParams, Sensors, parse_fault
 from ccopt.schedule import load_schedule
 
-PLANT = PlantParams()
+STIFFNESS = (2000.0, 2000.0)
+"""N/m: the impedance of the synthetic plant (world x, y), the plants' default."""
+DAMPING = (2.0 * math.sqrt(2000.0), 2.0 * math.sqrt(2000.0))
+"""N·s/m: critical for a 1 kg hand."""
 
 
 class PressingPlant:
@@ -27,7 +29,7 @@ class PressingPlant:
 
     def _error(self) -> tuple[np.ndarray, np.ndarray]:
         """``e`` (m) and ``ė`` (m/s), world x and y."""
-        t, (k_x, k_y, _) = self.time, PLANT.K
+        t, (k_x, k_y) = self.time, STIFFNESS
         w_x, w_y = 2.0 * math.pi / 2.1, 2.0 * math.pi / 1.3
         error = np.array([3.0 * math.sin(w_x * t) / k_x, -(15.0 + 8.0 * math.sin(w_y * t)) / k_y])
         rate = np.array([3.0 * w_x * math.cos(w_x * t) / k_x, -8.0 * w_y * math.cos(w_y * t) / k_y])
@@ -42,7 +44,7 @@ class PressingPlant:
 
     def hand_wrench(self) -> np.ndarray:
         error, rate = self._error()
-        force = np.array(PLANT.K[:2]) * error + np.array(PLANT.D[:2]) * rate
+        force = np.array(STIFFNESS) * error + np.array(DAMPING) * rate
         return geometry.wrench_world_to_hand(self.hand_pose()[2], [*force, 0.1 * math.sin(self.time)])
 
 
@@ -147,15 +149,20 @@ def test_noise_free_sensors_are_not_stuck_but_can_be_dead() -> None:
 def test_the_monitor_accepts_the_plants_recorded_impedance_runs() -> None:
     """A closed-loop run of the paper schedule on the planar plant (slides both ways and pivots):
     measured pose and wrench against the loop's impedance target, no alarm."""
-    params = closed_loop.LoopParams()
-    result = closed_loop.run(make_object("paper-square"), load_schedule("paper"), params, seed=1)
+    result = closed_loop.run(make_object("paper-square"), load_schedule("paper"), seed=1)
     samples = result.samples
-    health = SensorHealth(HealthParams.for_plant(params.plant_params))
+    health = SensorHealth()  # the default impedance is the loop's
     for time, pose, wrench, target in zip(
         samples["time"], samples["hand_pose"], samples["hand_wrench"], samples["target"], strict=True
     ):
         health.update(time, pose, wrench, target)
     assert len(samples["time"]) > 1000 and health.health.status == OK
+
+
+def test_the_impedance_can_be_the_robots_own() -> None:
+    params = HealthParams.from_impedance([1000, 1500, 30], (50.0, 60.0, 0.1), hold=0.1)
+    assert params.stiffness == (1000.0, 1500.0, 30.0) and params.damping == (50.0, 60.0, 0.1)
+    assert params.hold == 0.1 and HealthParams().damping[:2] == DAMPING
 
 
 @pytest.mark.parametrize(

@@ -22,7 +22,7 @@ from numbers import Real
 
 import numpy as np
 
-from ccopt.plant.base import Plant, _real
+from ccopt.plant.base import Plant
 
 FAULT_KINDS = {
     "dropout": "each sample (pose and wrench) is NaN with probability VALUE",
@@ -70,7 +70,7 @@ class Fault:
     def __post_init__(self) -> None:
         if self.kind not in FAULT_KINDS:
             raise ValueError(f"unknown sensor fault {self.kind!r}; expected one of {', '.join(FAULT_KINDS)}")
-        start = _real(f"{self.kind} start", self.start)
+        start = _finite(f"{self.kind} start", self.start)
         if start < 0.0:
             raise ValueError(f"{self.kind} start must be at least 0 s, got {self.start!r}")
         object.__setattr__(self, "start", start)
@@ -80,7 +80,7 @@ class Fault:
             return
         if self.value is None:
             raise ValueError(f"sensor fault {self.kind} needs a value ({FAULT_KINDS[self.kind]})")
-        value = _real(f"{self.kind} value", self.value)
+        value = _finite(f"{self.kind} value", self.value)
         if self.kind == "dropout" and not 0.0 <= value <= 1.0:
             raise ValueError(f"dropout probability must be in [0, 1], got {self.value!r}")
         if self.kind == "delay" and not 0.0 <= value <= MAX_DELAY:
@@ -92,6 +92,16 @@ class Fault:
         value = "" if self.value is None else f":{self.value!r}"
         start = f"@{self.start!r}" if self.start else ""
         return f"{self.kind}{value}{start}"
+
+
+def _finite(name: str, value: object) -> float:
+    """``value`` as a finite float; ``TypeError``/``ValueError`` naming ``name`` and the value."""
+    if isinstance(value, bool) or not isinstance(value, Real):
+        raise TypeError(f"{name} must be a real number, got {type(value).__name__} {value!r}")
+    number = float(value)
+    if not math.isfinite(number):
+        raise ValueError(f"{name} must be finite, got {value!r}")
+    return number
 
 
 def parse_fault(text: str) -> Fault:
