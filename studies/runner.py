@@ -12,7 +12,10 @@ A study is
 worker, a :class:`~concurrent.futures.ProcessPoolExecutor` (``spawn``) for several, or a Dask
 distributed cluster when a scheduler address is given — and returns the results in spec order. A trial
 that raises becomes ``{"error": "<one line>"}``. Every finished trial is appended at once to
-``trials.jsonl`` in the study's folder, so an interrupted study keeps what it finished.
+``trials.jsonl`` in the study's folder, so an interrupted study keeps what it finished, and
+:func:`run_study` resumes it: run again into the same folder, it reuses every trial of
+``trials.jsonl`` whose spec equals one of its own and that did not fail, and runs the others
+(``--fresh`` starts over; so should a study whose trial code changed).
 
 Trial functions may run in several threads of one Dask worker at once: per-process state that is not
 thread-safe (parametrised cvxpy problems, simulators) belongs in a
@@ -120,7 +123,8 @@ def study_parser(name: str, description: str, trials: bool = True) -> OneLinePar
     """The parser of study ``name`` with the shared options; the study adds its own.
 
     ``--out DIR`` (default ``runs/study-NAME``) always; with ``trials``, also ``--workers N``
-    (default :func:`default_workers`), ``--scheduler ADDRESS``, ``--seed`` and ``--no-progress``.
+    (default :func:`default_workers`), ``--scheduler ADDRESS``, ``--seed``, ``--no-progress`` and
+    ``--fresh`` (run every trial again instead of resuming, see :func:`run_study`).
     Bad values end the program with one line on stderr and exit status 2.
     """
     parser = OneLineParser(prog=f"python -m studies {name}", description=description)
@@ -147,6 +151,11 @@ def study_parser(name: str, description: str, trials: bool = True) -> OneLinePar
         )
         parser.add_argument("--seed", type=int, default=0, help="base seed of the trials (default: 0)")
         parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+        parser.add_argument(
+            "--fresh",
+            action="store_true",
+            help="run every trial again; by default the trials already finished in --out are reused",
+        )
     return parser
 
 
@@ -158,11 +167,16 @@ class RunOptions:
     workers: int = 1
     scheduler: str | None = None
     progress: bool = True
+    fresh: bool = False
 
     @classmethod
     def from_args(cls, args: argparse.Namespace) -> RunOptions:
         return cls(
-            out=args.out, workers=args.workers, scheduler=args.scheduler, progress=not args.no_progress
+            out=args.out,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            progress=not args.no_progress,
+            fresh=args.fresh,
         )
 
 
@@ -259,15 +273,16 @@ def _executor(workers: int, scheduler: str | None) -> Iterator[Executor]:
 
 
 def _completed(
-    function: Trial, specs: Sequence[Spec], workers: int, scheduler: str | None
+    function: Trial, specs: Sequence[Spec], indices: Sequence[int], workers: int, scheduler: str | None
 ) -> Iterator[tuple[int, dict, float]]:
-    """``(index, result, seconds)`` of each trial as it finishes; in process for one local worker."""
+    """``(index, result, seconds)`` of the trials ``indices`` as each finishes; in process for one
+    local worker."""
     if scheduler is None and workers == 1:
-        for k, spec in enumerate(specs):
-            yield k, *_timed_trial(function, spec)
+        for k in indices:
+            yield k, *_timed_trial(function, specs[k])
         return
     with _executor(workers, scheduler) as executor:
-        futures = {executor.submit(_timed_trial, function, spec): k for k, spec in enumerate(specs)}
+        futures = {executor.submit(_timed_trial, function, specs[k]): k for k in indices}
         for future in as_completed(futures):
             try:
                 result, seconds = future.result()
@@ -283,6 +298,7 @@ def run_trials(
     scheduler: str | None = None,
     progress: bool = True,
     log: Path | None = None,
+    finished: Mapping[int, dict] | None = None,
 ) -> list[dict]:
     """Run ``function`` on every spec and return the results in spec order.
 
@@ -295,15 +311,19 @@ def run_trials(
         progress: show a tqdm bar over completed trials (stderr).
         log: a ``trials.jsonl`` to append each finished trial to, as it finishes:
             ``{"index", "spec", "result", "seconds"}`` per line.
+        finished: results already known, by spec index (see :func:`finished_trials`): those trials
+            are not run (nor logged) and their results are returned as given.
 
     A trial that raises yields ``{"error": "<one line>"}``. Raises ``RuntimeError`` if ``scheduler``
     is given but Dask is not installed, ``OSError`` (``TimeoutError``) if the scheduler is unreachable.
     """
     if workers < 1:
         raise ValueError(f"workers must be at least 1, got {workers}")
-    results: dict[int, dict] = {}
-    with tqdm(total=len(specs), disable=not progress, unit="trial", dynamic_ncols=True) as bar:
-        for k, result, seconds in _completed(function, specs, workers, scheduler):
+    results = dict(finished or {})
+    remaining = [k for k in range(len(specs)) if k not in results]
+    bar = tqdm(total=len(specs), initial=len(results), disable=not progress, unit="trial", dynamic_ncols=True)
+    with bar:
+        for k, result, seconds in _completed(function, specs, remaining, workers, scheduler):
             results[k] = result
             if log is not None:
                 record = {"index": k, "spec": spec_dict(specs[k]), "result": result, "seconds": seconds}
@@ -319,16 +339,28 @@ def _append_line(path: Path, record: dict) -> None:
 
 
 def run_study(prog: str, function: Trial, specs: Sequence[Spec], options: RunOptions) -> list[dict]:
-    """:func:`run_trials` for a study's command line, into ``options.out`` (created) and a fresh log.
+    """:func:`run_trials` for a study's command line, into ``options.out`` (created), resumed.
 
-    An unreachable scheduler or an unwritable folder ends the program with one line (exit 2); Ctrl-C
-    with one line (exit 130), the finished trials kept in ``trials.jsonl``.
+    The trials already finished in ``options.out``'s ``trials.jsonl`` (:func:`finished_trials`) are
+    reused and the log is rewritten to hold just them; the others run and are appended. With
+    ``options.fresh`` the log starts empty and every trial runs. An unreachable scheduler or an
+    unwritable folder ends the program with one line (exit 2); Ctrl-C with one line (exit 130), the
+    finished trials kept in ``trials.jsonl``.
     """
     log = options.out / TRIALS_LOG
     try:
         options.out.mkdir(parents=True, exist_ok=True)
-        log.write_text("")
-        return run_trials(function, specs, options.workers, options.scheduler, options.progress, log)
+        kept = {} if options.fresh or not log.is_file() else finished_trials(read_trials(log), specs)
+        _rewrite_log(log, [kept[k] for k in sorted(kept)])
+        if kept:
+            sys.stderr.write(
+                f"{prog}: resuming: {len(kept)} of {len(specs)} trials already finished in {log} "
+                "(--fresh runs them again)\n"
+            )
+        finished = {k: record["result"] for k, record in kept.items()}
+        return run_trials(
+            function, specs, options.workers, options.scheduler, options.progress, log, finished
+        )
     except (OSError, TimeoutError, RuntimeError) as error:
         fail(prog, error_line(error))
     except KeyboardInterrupt:
@@ -336,10 +368,55 @@ def run_study(prog: str, function: Trial, specs: Sequence[Spec], options: RunOpt
         raise SystemExit(130) from None
 
 
+def _rewrite_log(log: Path, records: Sequence[dict]) -> None:
+    """Replace ``log`` atomically with ``records``, one JSON line each."""
+    partial = log.with_name(log.name + ".partial")
+    partial.write_text("".join(json.dumps(json_ready(record)) + "\n" for record in records))
+    os.replace(partial, log)
+
+
 def read_trials(path: Path) -> list[dict]:
-    """The records of a ``trials.jsonl`` (finished trials, in completion order)."""
-    with open(path) as stream:
-        return [json.loads(line) for line in stream if line.strip()]
+    """The records of a ``trials.jsonl`` (finished trials, in completion order).
+
+    The log may have been cut short (a killed study leaves a partial last line) or damaged: lines
+    that are not JSON objects are left out.
+    """
+    records = []
+    with open(path, encoding="utf-8", errors="replace") as stream:
+        for line in stream:
+            try:
+                record = json.loads(line)
+            except (ValueError, RecursionError):
+                continue
+            if isinstance(record, dict):
+                records.append(record)
+    return records
+
+
+def spec_key(spec: Spec) -> str:
+    """A spec's identity: its :func:`spec_dict` as canonical JSON (the same after a round trip
+    through ``trials.jsonl``)."""
+    return json.dumps(spec_dict(spec), sort_keys=True)
+
+
+def finished_trials(records: Sequence[dict], specs: Sequence[Spec]) -> dict[int, dict]:
+    """The log records (``{"index", "spec", "result", "seconds"}``) that finish some of ``specs``,
+    by spec index, each with its ``index`` set to that spec's.
+
+    A record finishes every spec equal to its ``spec`` (:func:`spec_key`) if its ``result`` is a
+    dict without ``"error"``; the latest such record counts. Records of other specs are left out.
+    """
+    by_key: dict[str, dict] = {}
+    for record in records:
+        result, spec = record.get("result"), record.get("spec")
+        if isinstance(result, dict) and "error" not in result and isinstance(spec, dict):
+            by_key[spec_key(spec)] = record
+    found = {}
+    for k, spec in enumerate(specs):
+        record = by_key.get(spec_key(spec))
+        if record is not None:
+            found[k] = {**record, "index": k}
+    return found
 
 
 def write_results(out: Path, specs: Sequence[Spec], results: Sequence[dict], summary: dict) -> None:

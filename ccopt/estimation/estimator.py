@@ -17,9 +17,10 @@ m/rad) and hand wrench ``(f_n, f_t, τ)`` (hand frame, N and N·m, :mod:`ccopt.g
 5. while the hand is flush, ``θ_o`` (the hand's angle) through a constant-rate Kalman filter
    (:mod:`.angle_filter`), which averages the angle noise without lagging a pivot.
 
-Samples with a non-finite pose or wrench (sensor dropouts) change nothing: the previous estimate is
-returned with the new time and ``skipped=True``. A recording of ``(time, hand_pose, hand_wrench)`` can
-be replayed with :func:`replay`.
+Samples with a non-finite pose or wrench (sensor dropouts), or a value beyond what any run of this
+robot can produce (:data:`SAMPLE_BOUNDS`: a glitch, not a measurement), change nothing: the previous
+estimate is returned with the new time and ``skipped=True``. A recording of ``(time, hand_pose,
+hand_wrench)`` can be replayed with :func:`replay`.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ import dataclasses
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from numbers import Real
 
 import casadi as ca
 import numpy as np
@@ -57,6 +59,10 @@ def _flat_cone_rows() -> BufferedFunction:
 
 
 _CONE_ROWS = _flat_cone_rows()
+SAMPLE_BOUNDS = (1e9, 1e3, 1e3, 1e3, 1e4, 1e4, 1e3)
+"""Largest magnitudes of a sample's ``(time (s), x_h, y_h (m), θ_h (rad), f_n, f_t (N), τ (N·m))``:
+far beyond any run (hand within metres, forces within tens of N), yet small enough that no product
+or square in the estimator overflows. A sample beyond them is skipped like a dropout."""
 
 
 @dataclass(frozen=True)
@@ -183,15 +189,25 @@ class Estimator:
         self._last: Estimate | None = None
 
     def update(self, time: float, hand_pose: ArrayLike, hand_wrench: ArrayLike) -> Estimate:
-        """Process one sample: ``hand_pose = (x_h, y_h, θ_h)`` (world), ``hand_wrench = (f_n, f_t, τ)``."""
-        pose = np.asarray(hand_pose, dtype=float)
-        wrench = np.array(hand_wrench, dtype=float)
+        """Process one sample: ``hand_pose = (x_h, y_h, θ_h)`` (world), ``hand_wrench = (f_n, f_t, τ)``.
+
+        Raises ``TypeError`` or ``ValueError`` (and changes nothing) unless ``time`` is a real
+        number and the pose and wrench are three numbers each, all within the float range.
+        """
+        if not isinstance(time, Real):
+            raise TypeError(f"time must be a real number, got {type(time).__name__} {time!r}")
+        try:
+            time = float(time)
+            pose = np.asarray(hand_pose, dtype=float)
+            wrench = np.array(hand_wrench, dtype=float)
+        except OverflowError:  # an integer beyond the float range
+            raise ValueError("time, hand_pose and hand_wrench must be within the float range") from None
         if pose.shape != (3,) or wrench.shape != (3,):
             raise ValueError(
                 f"hand_pose and hand_wrench must have shape (3,), got {pose.shape} and {wrench.shape}"
             )
         values = [time, *pose.tolist(), *wrench.tolist()]
-        if not all(map(math.isfinite, values)):
+        if not all(map(float.__ge__, SAMPLE_BOUNDS, map(abs, values))):  # also False for NaN
             return self._skip(time)
         theta_h, f_n, f_t = values[3], values[4], values[5]
         e_n, e_t = geometry.hand_normal(theta_h).tolist(), geometry.hand_tangent(theta_h).tolist()

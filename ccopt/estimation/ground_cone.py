@@ -107,11 +107,12 @@ class GroundCone:
         fitted: per row, True if it was fitted to a long straight side of the hull — the friction
             face once the object slid that way, until then the edge of the sticking forces seen,
             which lies inside the face — and False for the conservative prior row.
-        mu_g: ``cot(∠(a₊, a₋)/2)`` if both faces are fitted, else NaN.
-        apex: intersection of the two rows (N, ``(0, m g)`` for a horizontal ground) if both faces
-            are fitted, else NaN.
-        up: the cone's "up" direction (unit, world): the bisector of the faces' normals if both
-            are fitted, else world up (used to tell left from right).
+        mu_g: ``cot(∠(a₊, a₋)/2)`` if both faces are fitted, else NaN (also for faces that are
+            parallel or opposite: a hull of zero width tells no cone).
+        apex: intersection of the two rows (N, ``(0, m g)`` for a horizontal ground) where
+            ``mu_g`` is defined, else NaN.
+        up: the cone's "up" direction (unit, world): the bisector of the faces' normals where
+            ``mu_g`` is defined, else world up (used to tell left from right).
     """
 
     A: np.ndarray
@@ -166,19 +167,41 @@ class GroundConeEstimator:
 def fit_ground_cone(
     directions: np.ndarray, support: np.ndarray, params: GroundConeParams, sample_count: int
 ) -> GroundCone:
-    """The ground rows from support values ``support[k] = h(directions[k])`` (see the module docstring)."""
-    if sample_count == 0 or not np.all(np.isfinite(support)):
+    """The ground rows from support values ``support[k] = h(directions[k])`` (see the module docstring).
+
+    Before any force, or if the hull is beyond floating point (two adjacent support lines parallel,
+    a corner or a face that overflows), the rows are the conservative prior about the origin and
+    not valid.
+    """
+    fit = _fit_rows(directions, support, params) if sample_count > 0 else None
+    if fit is None:
         return _cone(_prior_rows(WORLD_UP, params.mu_prior, [(0.0, 0.0)]), False, WORLD_UP, (False, False))
+    rows, fitted = fit
+    return _cone(rows, sample_count >= params.min_samples, WORLD_UP, fitted)
+
+
+def _fit_rows(
+    directions: np.ndarray, support: np.ndarray, params: GroundConeParams
+) -> tuple[list[Row2], tuple[bool, bool]] | None:
+    """The rows (friction faces where found, else prior rows touching the hull) and which are
+    faces; None unless the support values, the hull's corners and the rows are all finite."""
+    if not np.all(np.isfinite(support)):
+        return None
     active, vertices = half_plane_polygon(directions, support)
-    up = WORLD_UP
-    rows = _prior_rows(up, params.mu_prior, vertices)
+    if not math.isfinite(sum(x + y for x, y in vertices)):
+        return None
+    rows = _prior_rows(WORLD_UP, params.mu_prior, vertices)
     edges = _edges(directions[active].tolist(), vertices)
     fitted = [False, False]
     for index, side in enumerate((1.0, -1.0)):
-        face = _friction_face(edges, vertices, up, side, FACE_WINDOW_STEPS * 2.0 * math.pi / len(directions))
+        face = _friction_face(
+            edges, vertices, WORLD_UP, side, FACE_WINDOW_STEPS * 2.0 * math.pi / len(directions)
+        )
         if face is not None and face[2] >= params.min_face_length:
             rows[index], fitted[index] = face, True
-    return _cone(rows, sample_count >= params.min_samples, up, (fitted[0], fitted[1]))
+    if not math.isfinite(sum(normal[0] + normal[1] + offset for normal, offset, _ in rows)):
+        return None
+    return rows, (fitted[0], fitted[1])
 
 
 Row2 = tuple[tuple[float, float], float, float]
@@ -193,12 +216,15 @@ def half_plane_polygon(
 
     Returns the indices of the half-planes that touch the polygon, in counter-clockwise order, and
     its vertices: vertex ``i`` is where active lines ``i`` and ``i + 1`` (cyclically) meet, so edge
-    ``i`` runs from vertex ``i − 1`` to vertex ``i``. The classic sorted-angle deque sweep, O(K).
+    ``i`` runs from vertex ``i − 1`` to vertex ``i``; NaN where they are parallel. The classic
+    sorted-angle deque sweep, O(K).
     """
     ux, uy, h = directions[:, 0].tolist(), directions[:, 1].tolist(), support.tolist()
 
     def corner(i: int, j: int) -> tuple[float, float]:
         det = ux[i] * uy[j] - uy[i] * ux[j]
+        if det == 0.0:  # parallel lines (a hull of zero width): no corner
+            return math.nan, math.nan
         return (uy[j] * h[i] - uy[i] * h[j]) / det, (ux[i] * h[j] - ux[j] * h[i]) / det
 
     def outside(k: int, point: tuple[float, float]) -> bool:
@@ -230,14 +256,16 @@ def _cone(rows: list[Row2], valid: bool, up: tuple[float, float], fitted: tuple[
     normals = np.array([row[0] for row in rows])
     offsets = np.array([row[1] for row in rows])
     mu_g, apex = math.nan, np.full(2, np.nan)
-    if all(fitted):
-        (ax, ay), (cx, cy) = rows[0][0], rows[1][0]
-        up = (ax + cx, ay + cy)  # the faces' bisector: the cone's axis
-        up = (up[0] / math.hypot(*up), up[1] / math.hypot(*up))
-        mu_g = 1.0 / math.tan(0.5 * math.acos(max(-1.0, min(1.0, ax * cx + ay * cy))))
+    (ax, ay), (cx, cy) = rows[0][0], rows[1][0]
+    axis = math.hypot(ax + cx, ay + cy)  # of the faces' bisector, the cone's axis
+    half_angle = 0.5 * math.acos(max(-1.0, min(1.0, ax * cx + ay * cy)))
+    if all(fitted) and axis > 0.0 and half_angle > 0.0:  # not a hull of zero width
+        up = ((ax + cx) / axis, (ay + cy) / axis)
+        mu_g = 1.0 / math.tan(half_angle)
         det = ax * cy - ay * cx
         if det != 0.0:
-            apex = np.array([cy * offsets[0] - ay * offsets[1], ax * offsets[1] - cx * offsets[0]]) / det
+            (_, b_pos, _), (_, b_neg, _) = rows
+            apex = np.array([(cy * b_pos - ay * b_neg) / det, (ax * b_neg - cx * b_pos) / det])
     up_array = np.array(up)
     for array in (normals, offsets, apex, up_array):
         array.flags.writeable = False

@@ -42,8 +42,14 @@ def exact_quantile(sorted_values: list[float], level: float) -> float:
     position = (len(sorted_values) - 1) * level
     below = math.floor(position)
     above = min(below + 1, len(sorted_values) - 1)
-    fraction = position - below
-    return sorted_values[below] + fraction * (sorted_values[above] - sorted_values[below])
+    return interpolate(sorted_values[below], sorted_values[above], position - below)
+
+
+def interpolate(low: float, high: float, fraction: float) -> float:
+    """``low + fraction (high − low)`` for ``fraction`` in [0, 1], finite for any finite ``low`` and
+    ``high`` (their difference may overflow: then the equal convex combination, which cannot)."""
+    value = low + fraction * (high - low)
+    return value if math.isfinite(value) else (1.0 - fraction) * low + fraction * high
 
 
 def marker_levels(level: float) -> list[float]:
@@ -132,12 +138,15 @@ def _adjust_marker(heights: list[float], positions: list[float], marker: int, la
     parabolic = height + step / (gap_above + gap_below) * (
         (gap_below + step) * (above - height) / gap_above + (gap_above - step) * (height - below) / gap_below
     )
-    if below < parabolic < above:
+    if below < parabolic < above:  # False for an overflowed (inf or NaN) parabola
         heights[marker] = parabolic
     elif step > 0.0:
         heights[marker] = height + (above - height) / gap_above
     else:
         heights[marker] = height - (height - below) / gap_below
+    if not math.isfinite(heights[marker]):  # the neighbours' difference overflowed
+        neighbour, gap = (above, gap_above) if step > 0.0 else (below, gap_below)
+        heights[marker] = interpolate(height, neighbour, 1.0 / gap)
     positions[marker] += step
 
 
@@ -177,13 +186,14 @@ class P2QuantileBank:
         """Current estimates, shape ``(size,)``; NaN before the first sample."""
         if self._count == 0:
             return np.full(self.size, np.nan)
-        if self._count <= N_MARKERS:
-            return np.quantile(self._heights[: self._count], self.level, axis=0)
+        if self._count <= N_MARKERS:  # exact, as P2Quantile's
+            columns = np.sort(self._heights[: self._count], axis=0).T.tolist()
+            return np.array([exact_quantile(column, self.level) for column in columns])
         return self._heights[2].copy()
 
     def add(self, samples: np.ndarray) -> None:
         """Feed one sample per stream (float array of shape ``(size,)``); skipped if any is non-finite."""
-        if not math.isfinite(np.add.reduce(samples)):
+        if not np.isfinite(samples).all():
             return
         self._count += 1
         heights, relative = self._heights, self._relative
