@@ -80,14 +80,14 @@ def _command_run(args: argparse.Namespace, prog: str) -> int:
     except (ValueError, TypeError) as error:
         fail(prog, str(error))
     done = run_with_progress(experiment, obj, schedule, params, args, folder)
-    print_summary(done.summary, folder, interrupted=done.result.interrupted)
+    print_summary(done.summary, folder)
     loaded = record.load_record(folder)
     if not args.no_figures and loaded.data:
         from ccopt import plots
 
         paths = plots.write_figures(loaded, folder)
         print("figures: " + ", ".join(str(p) for p in paths))
-    return 130 if done.result.interrupted else 0
+    return EXIT_CODES[done.result.status]
 
 
 def run_with_progress(experiment, obj, schedule, params, args, folder):
@@ -110,31 +110,45 @@ def run_with_progress(experiment, obj, schedule, params, args, folder):
         )
 
 
-def print_summary(summary: dict, folder: Path, interrupted: bool) -> None:
-    def stat(key: str, field: str) -> str:
-        value = summary[key][field]
-        return "n/a" if value is None else f"{value:.2f}"
+EXIT_CODES = {
+    "completed": 0,
+    "contact_lost": 3,
+    "sensor_fault": 3,
+    "timeout": 3,
+    "error": 1,
+    "interrupted": 130,
+}
+"""How ``ccopt run`` exits, by how the run ended (bad input exits 2 before any run)."""
 
+
+def print_summary(summary: dict, folder: Path) -> None:
+    def stat(value: float | None, digits: int = 2) -> str:
+        return "n/a" if value is None else f"{value:.{digits}f}"
+
+    def spread(entry: dict) -> str:
+        return f"{stat(entry['median'])} [{stat(entry['q25'])}, {stat(entry['q75'])}]"
+
+    def errors(key: str) -> str:
+        return f"{stat(summary[key]['median'])} / {stat(summary[key]['p95'])}"
+
+    force = summary["normal_force_n"]
     rows = [
-        ("completed", str(summary["completed"])),
-        ("steps done", f"{summary['steps_done']}/{summary['steps_total']}"),
-        (
-            "θ_o error median / p95 (deg)",
-            f"{stat('theta_err_deg', 'median')} / {stat('theta_err_deg', 'p95')}",
+        ("status", summary["status"] + (f" ({summary['message']})" if summary.get("message") else "")),
+        ("steps reached", f"{summary['steps_done']}/{summary['steps_total']}"),
+        ("kinematics valid share", stat(summary["kinematics_valid_share"])),
+        ("θ_o error median / p95 (deg)", errors("theta_err_deg")),
+        ("s_h error median / p95 (mm)", errors("s_h_err_mm")),
+        ("s_g error median / p95 (mm)", errors("s_g_err_mm")),
+        *(
+            (f"realised/commanded {kind} median [q25, q75] (n)", f"{spread(entry)} ({entry['n']})")
+            for kind, entry in summary["ratio_by_kind"].items()
         ),
-        ("s_h error median / p95 (mm)", f"{stat('s_h_err_mm', 'median')} / {stat('s_h_err_mm', 'p95')}"),
-        ("s_g error median / p95 (mm)", f"{stat('s_g_err_mm', 'median')} / {stat('s_g_err_mm', 'p95')}"),
-        (
-            "realised/commanded median [q25, q75]",
-            f"{stat('ratio_realised_commanded', 'median')} "
-            f"[{stat('ratio_realised_commanded', 'q25')}, {stat('ratio_realised_commanded', 'q75')}]",
-        ),
+        ("normal force median / p99 / max (N)", " / ".join(stat(force[k], 1) for k in force)),
         ("unintended slips", str(summary["unintended_slips"])),
-        ("physically impossible steps (oracle)", str(summary.get("impossible_steps", "not checked"))),
+        ("steps the estimate ruled out", str(summary["infeasible_steps"])),
+        ("steps impossible on the true object (oracle)", str(summary.get("impossible_steps", "not checked"))),
         ("sim / wall time (s)", f"{summary['sim_time_s']:.1f} / {summary['wall_time_s']:.1f}"),
     ]
-    if interrupted:
-        rows.insert(0, ("INTERRUPTED", "record kept"))
     print_table(rows, ("metric", "value"))
     print(f"record: {folder}")
 

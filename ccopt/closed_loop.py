@@ -29,6 +29,7 @@ from ccopt.control.controller import Command, ControlInput, Controller, Controll
 from ccopt.control.targets import UNJUDGED, StaticsTarget, statics_target
 from ccopt.estimation.estimator import Estimate, Estimator, EstimatorParams
 from ccopt.hand import Hand
+from ccopt.health import HealthParams, SensorHealth
 from ccopt.modes import MOTION_CODES
 from ccopt.objects import PlanarObject
 from ccopt.plant.base import Plant, PlantParams, StartConfig
@@ -76,6 +77,7 @@ class LoopParams:
     estimator_params: EstimatorParams = field(default_factory=EstimatorParams)
     perturbations: tuple[Perturbation, ...] = ()
     settle_time: float = 0.2
+    supervision: Supervision = field(default_factory=lambda: Supervision())
 
     def __post_init__(self) -> None:
         if self.plant not in ("planar", "panda"):
@@ -133,14 +135,22 @@ class StepResult:
 
 @dataclass(frozen=True)
 class RunResult:
-    """What a run returns; the full time series is in the record folder (or ``samples``)."""
+    """What a run returns; the full time series is in the record folder (or ``samples``).
+
+    ``status`` is how the run ended (:data:`RUN_STATUSES`), ``message`` why, in one line.
+    """
 
     steps: tuple[StepResult, ...]
     samples: dict[str, np.ndarray]
     sim_time: float
     wall_time: float
-    interrupted: bool
+    status: str
+    message: str
     folder: Path | None
+
+    @property
+    def interrupted(self) -> bool:
+        return self.status == "interrupted"
 
 
 def make_plant(obj: PlanarObject, params: LoopParams) -> Plant:
@@ -279,6 +289,37 @@ class _StepTracker:
             self.advance(now, estimate, hand_pose, "timeout")
 
 
+RUN_STATUSES = ("completed", "interrupted", "contact_lost", "sensor_fault", "timeout", "error")
+"""How a run can end: its schedule ran to the end; Ctrl-C or a signal; the hand lost the object and
+could not find it again; a sensor stopped telling the truth; the run's time limit; an exception."""
+
+
+@dataclass(frozen=True)
+class Supervision:
+    """When a run stops by itself, and what it tries first. Times in s, lengths in m, forces in N.
+
+    Attributes:
+        contact_force: the hand touches the object while the measured ``f_n`` exceeds this.
+        contact_grace: contact may be missing this long (a bounce, a dropout) before the loop acts.
+        recontact_speed: speed of the target along ``e_n`` while the loop presses to find the object.
+        recontact_distance: how far past the pose where contact was lost it presses before giving up.
+        time_factor: a run's time limit is this times the sum of its steps' timeouts (the schedule's
+            own worst case), at least ``min_time``.
+        min_time: the smallest time limit.
+    """
+
+    contact_force: float = 1.0
+    contact_grace: float = 0.2
+    recontact_speed: float = 0.01
+    recontact_distance: float = 0.02
+    time_factor: float = 1.5
+    min_time: float = 10.0
+
+    def time_limit(self, schedule: Schedule) -> float:
+        """The simulated time after which a run of ``schedule`` ends with status ``timeout``."""
+        return max(self.min_time, self.time_factor * sum(step.timeout for step in schedule.steps))
+
+
 def run(
     obj: PlanarObject,
     schedule: Schedule,
@@ -291,79 +332,158 @@ def run(
     """Run ``schedule`` on ``obj`` in closed loop; record to ``out`` if given.
 
     ``on_tick(sim_time, step_index, n_steps)`` is called at every control tick (progress bars).
-    Ctrl-C ends the run early: the record is closed with status ``interrupted`` and the result says so.
+    The run ends when the schedule does, or early with a status (:data:`RUN_STATUSES`): Ctrl-C
+    (``KeyboardInterrupt``) gives ``interrupted``; a lost object the loop cannot find again gives
+    ``contact_lost``, a sensor fault (:mod:`ccopt.health`) ``sensor_fault``, the run's time limit
+    ``timeout`` — each with the impedance target held where the hand is — and an exception inside the
+    loop ``error`` with its one-line message. The record is closed with that status in every case.
     """
-    params = params or LoopParams()
-    plant = make_plant(obj, params)
-    sensors = Sensors(plant, params.sensor_params, seed)
-    estimator = Estimator(params.hand, params.estimator_params)
-    controller = Controller(params.hand, params.control_period, params.controller_params)
-    writer = RecordWriter(out, meta or {}) if out is not None else None
-    samples: dict[str, list[np.ndarray]] = {}
-    tracker = _StepTracker(schedule, params.settle_time)
-    dt = plant.timestep
-    estimator_every = params.ticks(params.estimator_hz)
-    controller_every = params.ticks(params.controller_hz)
-    target = np.array(plant.target(), dtype=float)
-    velocity = np.zeros(3)
-    pending = list(params.perturbations)
-    last_slack, last_feasible = 0.0, True
-    estimate: Estimate | None = None
-    start_wall = wallclock.perf_counter()
-    interrupted = False
-    tick = 0
-    try:
-        while not tracker.done:
-            tick += 1
-            target = target + velocity * dt
-            plant.set_target(target, velocity)
-            while pending and plant.time >= pending[0].time:
-                push = pending.pop(0)
-                plant.push_object(push.force, push.duration)
-            plant.step(1)
-            if tick % estimator_every == 0 or estimate is None:
-                measurement = sensors.read()
-                estimate = estimator.update(measurement.time, measurement.hand_pose, measurement.hand_wrench)
-                hand_pose = measurement.hand_pose if np.all(np.isfinite(measurement.hand_pose)) else None
-                sample = _sample(plant, measurement, estimate, target, tracker, last_slack, last_feasible)
-                if writer is not None:
-                    writer.append(sample)
-                else:
-                    for key, value in sample.items():
-                        samples.setdefault(key, []).append(np.asarray(value))
-            if tick % controller_every == 0 and hand_pose is not None:
-                tracker.update(plant.time, estimate, hand_pose)
-                if tracker.done:
+    loop = _Loop(obj, schedule, params or LoopParams(), seed, out, meta, on_tick)
+    return loop.run()
+
+
+class _Loop:
+    """One closed-loop run: the plant, its sensors, the estimator, the controller and the supervision."""
+
+    def __init__(self, obj, schedule, params, seed, out, meta, on_tick) -> None:
+        self.params = params
+        self.schedule = schedule
+        self.plant = make_plant(obj, params)
+        self.sensors = Sensors(self.plant, params.sensor_params, seed)
+        self.estimator = Estimator(params.hand, params.estimator_params)
+        self.controller = Controller(params.hand, params.control_period, params.controller_params)
+        self.health = SensorHealth(HealthParams.from_impedance(params.hand.stiffness, params.hand.damping))
+        self.writer = RecordWriter(out, meta or {}) if out is not None else None
+        self.folder = Path(out) if out is not None else None
+        self.on_tick = on_tick
+        self.samples: dict[str, list[np.ndarray]] = {}
+        self.tracker = _StepTracker(schedule, params.settle_time)
+        self.target = np.array(self.plant.target(), dtype=float)
+        self.velocity = np.zeros(3)
+        self.pending = list(params.perturbations)
+        self.last_solution: tuple[float, bool] = (0.0, True)
+        self.estimate: Estimate | None = None
+        self.hand_pose: np.ndarray | None = None
+        self.lost_since: float | None = None
+        self.lost_pose: np.ndarray | None = None
+        self.status = "completed"
+        self.message = ""
+
+    def run(self) -> RunResult:
+        start = wallclock.perf_counter()
+        limit = self.params.supervision.time_limit(self.schedule)
+        estimator_every = self.params.ticks(self.params.estimator_hz)
+        controller_every = self.params.ticks(self.params.controller_hz)
+        tick = 0
+        try:
+            while not self.tracker.done and self.status == "completed":
+                tick += 1
+                self._advance_plant()
+                if tick % estimator_every == 0 or self.estimate is None:
+                    self._sense()
+                if self.status != "completed":
                     break
-                coordinates = tracker.coordinates(estimate, hand_pose)
-                if coordinates is None:  # the estimate is unusable: hold where the command says
-                    coordinates = tracker.command.targets
-                p = params.controller_params
-                aim = statics_target(
-                    estimate, float(hand_pose[2]), tracker.command.motion, params.hand.force_limits,
-                    p.normal_force, p.statics_margin,
-                )
-                state = control_input(estimate, hand_pose, coordinates, aim)
-                output = controller.update(state, tracker.command)
-                last_slack, last_feasible = output.solution.slack, output.solution.feasible
-                velocity = geometry.twist_hand_to_world(hand_pose[2], output.step) / controller.period
-                if on_tick is not None:
-                    on_tick(plant.time, tracker.index, len(schedule.steps))
-    except KeyboardInterrupt:
-        interrupted = True
-    wall = wallclock.perf_counter() - start_wall
-    result = RunResult(
-        steps=tuple(tracker.results),
-        samples={key: np.stack(values) for key, values in samples.items()},
-        sim_time=plant.time,
-        wall_time=wall,
-        interrupted=interrupted,
-        folder=Path(out) if out is not None else None,
-    )
-    if writer is not None:
-        writer.meta["steps"] = [step.as_dict() for step in result.steps]
-        writer.close(status="interrupted" if interrupted else "completed")
-    return result
+                if tick % controller_every == 0:
+                    self._control()
+                if self.plant.time >= limit:
+                    self._stop("timeout", f"the run's time limit of {limit:.0f} s (simulated) ran out")
+        except KeyboardInterrupt:
+            self.status, self.message = "interrupted", "interrupted"
+        except Exception as error:
+            self.status, self.message = "error", f"{type(error).__name__}: {error}".splitlines()[0]
+        return self._finish(wallclock.perf_counter() - start)
+
+    def _advance_plant(self) -> None:
+        plant, dt = self.plant, self.plant.timestep
+        self.target = self.target + self.velocity * dt
+        plant.set_target(self.target, self.velocity)
+        while self.pending and plant.time >= self.pending[0].time:
+            push = self.pending.pop(0)
+            plant.push_object(push.force, push.duration)
+        plant.step(1)
+
+    def _sense(self) -> None:
+        reading = self.sensors.read()
+        time, pose, wrench = reading.time, reading.hand_pose, reading.hand_wrench
+        self.estimate = self.estimator.update(time, pose, wrench)
+        self.hand_pose = pose if bool(np.all(np.isfinite(pose))) else None
+        sample = _sample(self.plant, reading, self.estimate, self.target, self.tracker, *self.last_solution)
+        if self.writer is not None:
+            self.writer.append(sample)
+        else:
+            for key, value in sample.items():
+                self.samples.setdefault(key, []).append(np.asarray(value))
+        health = self.health.update(time, pose, wrench, self.target)
+        if not health.ok:
+            self._stop("sensor_fault", health.message)
+
+    def _control(self) -> None:
+        if self.hand_pose is None or self.estimate.skipped:  # a dropout: the target holds still
+            self.velocity[:] = 0.0
+            return
+        if self._contact_lost():
+            return
+        tracker, estimate, hand_pose = self.tracker, self.estimate, self.hand_pose
+        tracker.update(self.plant.time, estimate, hand_pose)
+        if tracker.done:
+            return
+        coordinates = tracker.coordinates(estimate, hand_pose)
+        if coordinates is None:  # the estimate is unusable: hold where the command says
+            coordinates = tracker.command.targets
+        p = self.params.controller_params
+        aim = statics_target(
+            estimate, float(hand_pose[2]), tracker.command.motion, self.params.hand.force_limits,
+            p.normal_force, p.statics_margin,
+        )
+        output = self.controller.update(control_input(estimate, hand_pose, coordinates, aim), tracker.command)
+        self.last_solution = (output.solution.slack, output.solution.feasible)
+        self.velocity = geometry.twist_hand_to_world(hand_pose[2], output.step) / self.controller.period
+        if self.on_tick is not None:
+            self.on_tick(self.plant.time, tracker.index, len(self.schedule.steps))
+
+    def _contact_lost(self) -> bool:
+        """Whether the hand has lost the object: after a grace time the target presses along ``e_n``
+        to find it again; if it has not after ``recontact_distance``, the run stops."""
+        rules, now = self.params.supervision, self.plant.time
+        if self.estimate.wrench[0] > rules.contact_force:
+            self.lost_since = self.lost_pose = None
+            return False
+        if self.lost_since is None:
+            self.lost_since, self.lost_pose = now, self.hand_pose.copy()
+        if now - self.lost_since < rules.contact_grace:
+            return False
+        travelled = float(np.linalg.norm(self.hand_pose[:2] - self.lost_pose[:2]))
+        if travelled > rules.recontact_distance:
+            self._stop("contact_lost", f"the hand lost the object at t = {self.lost_since:.2f} s and did "
+                       f"not find it again within {1e3 * rules.recontact_distance:.0f} mm")
+            return True
+        press = geometry.hand_normal(float(self.hand_pose[2])) * rules.recontact_speed
+        self.velocity = np.array([press[0], press[1], 0.0])
+        return True
+
+    def _stop(self, status: str, message: str) -> None:
+        """End the run with ``status``, the impedance target held where the hand is."""
+        self.status, self.message = status, message
+        self.velocity = np.zeros(3)
+        if self.hand_pose is not None:
+            self.target = np.array(self.hand_pose, dtype=float)
+            self.plant.set_target(self.target, self.velocity)
+
+    def _finish(self, wall: float) -> RunResult:
+        result = RunResult(
+            steps=tuple(self.tracker.results),
+            samples={key: np.stack(values) for key, values in self.samples.items()},
+            sim_time=self.plant.time,
+            wall_time=wall,
+            status=self.status,
+            message=self.message,
+            folder=self.folder,
+        )
+        if self.writer is not None:
+            self.writer.meta["steps"] = [step.as_dict() for step in result.steps]
+            self.writer.meta["message"] = self.message
+            self.writer.close(status=self.status)
+        return result
 
 
 def _sample(plant, measurement, estimate, target, tracker, slack, feasible) -> dict[str, np.ndarray]:

@@ -107,7 +107,10 @@ def run_experiment(
     result = closed_loop.run(obj, schedule, params, seed=seed, out=folder, meta=meta, on_tick=on_tick)
     data = load_record(folder).data if folder is not None else result.samples
     steps = [step.as_dict() for step in result.steps]
-    summary = metrics.summarize(data, steps, len(schedule.steps), result.sim_time, result.wall_time)
+    summary = metrics.summarize(
+        data, steps, len(schedule.steps), result.sim_time, result.wall_time, status=result.status
+    )
+    summary["message"] = result.message
     summary["impossible_steps"] = statics.impossible_steps(checks)
     summary["kinematics_resets"] = metrics.kinematics_resets(data["est_kinematics_valid"]) if data else 0
     if folder is not None:

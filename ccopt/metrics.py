@@ -128,30 +128,68 @@ def mode_confusion(data: Mapping[str, np.ndarray]) -> dict[str, dict[str, float 
     return out
 
 
+def ratio_by_kind(
+    data: Mapping[str, np.ndarray], steps: Sequence[Mapping[str, object]]
+) -> dict[str, dict[str, float | int | None]]:
+    """Quartiles of the realised/commanded ratio per kind of step (``pivot``, ``slide_hand``,
+    ``slide_ground``), over the steps of that kind that ran (an infeasible step did not)."""
+    out = {}
+    for kind in modes.KINDS[1:]:
+        chosen = [step for step in steps if step["kind"] == kind and step.get("status") != "infeasible"]
+        values = realised_ratios(data, chosen)
+        out[kind] = quartiles(values)
+    return out
+
+
+def quartiles(values: Sequence[float] | np.ndarray) -> dict[str, float | int | None]:
+    """``{median, q25, q75, n}`` of some values (None for an empty set)."""
+    values = np.asarray(values, dtype=float)
+    if values.size == 0:
+        return {"median": None, "q25": None, "q75": None, "n": 0}
+    q25, median, q75 = np.percentile(values, [25, 50, 75])
+    return {"median": float(median), "q25": float(q25), "q75": float(q75), "n": int(values.size)}
+
+
+def normal_force(data: Mapping[str, np.ndarray]) -> dict[str, float | None]:
+    """The true normal force of the hand on the object, N: median, 99th percentile and largest."""
+    wrench = np.asarray(data.get("true_hand_wrench", np.empty((0, 3))))
+    if wrench.size == 0:
+        return {"median": None, "p99": None, "max": None}
+    force = wrench[:, 0]
+    return {
+        "median": float(np.median(force)),
+        "p99": float(np.percentile(force, 99)),
+        "max": float(force.max()),
+    }
+
+
 def summarize(
     data: Mapping[str, np.ndarray],
     steps: Sequence[Mapping[str, object]],
     steps_total: int,
     sim_time: float,
     wall_time: float,
+    status: str = "completed",
 ) -> dict[str, object]:
-    """The ``summary.json`` of a run (docs/architecture.md §8)."""
+    """The ``summary.json`` of a run (docs/architecture.md §8); ``status`` is how the run ended."""
     ratios = realised_ratios(data, steps)
     slips = unintended_slips(data, steps)
     contacts = np.asarray(data["true_contacts"], dtype=bool)
     kept_contact = bool(np.mean(contacts.all(axis=1)) >= CONTACT_SHARE) if contacts.size else False
     steps_done = sum(bool(step["reached"]) for step in steps)
+    valid = np.asarray(data["est_kinematics_valid"], dtype=bool)
     return {
+        "status": status,
         "completed": bool(steps_done == steps_total and kept_contact),
         "steps_done": steps_done,
         "steps_total": steps_total,
         "contact_kept": kept_contact,
         **estimation_errors(data),
-        "ratio_realised_commanded": {
-            "median": float(np.median(ratios)) if ratios.size else None,
-            "q25": float(np.percentile(ratios, 25)) if ratios.size else None,
-            "q75": float(np.percentile(ratios, 75)) if ratios.size else None,
-        },
+        "kinematics_valid_share": float(valid.mean()) if valid.size else 0.0,
+        "ratio_realised_commanded": quartiles(ratios),
+        "ratio_by_kind": ratio_by_kind(data, steps),
+        "normal_force_n": normal_force(data),
+        "infeasible_steps": [int(step["index"]) for step in steps if step.get("status") == "infeasible"],
         "unintended_slips": len(slips),
         "slip_events": slips,
         "mode_confusion": mode_confusion(data),

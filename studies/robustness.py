@@ -120,13 +120,6 @@ def causes_of(result: Mapping[str, object]) -> list[str]:
     return [RUN_ERROR] if "error" in result else list(result["causes"])
 
 
-def _quartiles(values: list[float]) -> dict[str, float | None]:
-    if not values:
-        return {"q25": None, "median": None, "q75": None, "n": 0}
-    q25, median, q75 = np.percentile(values, [25, 50, 75])
-    return {"q25": float(q25), "median": float(median), "q75": float(q75), "n": len(values)}
-
-
 ERROR_COLUMNS = ("theta_err_deg_median", "s_h_err_mm_median", "s_g_err_mm_median", "ratio_median")
 
 
@@ -146,7 +139,7 @@ def summarise(specs: Sequence[RandomObject], results: Sequence[dict]) -> dict:
         "successes_on_feasible_schedules": sum(
             bool(r.get("success")) and r.get("impossible_steps") == [] for r in results
         ),
-        "errors_over_trials": {key: _quartiles(column(results, key)) for key in ERROR_COLUMNS},
+        "errors_over_trials": {key: metrics.quartiles(column(results, key)) for key in ERROR_COLUMNS},
         "causes": dict(Counter(c for found in causes for c in found)),
         "primary_causes": dict(Counter(found[0] for found in causes if found)),
         "failures": [
