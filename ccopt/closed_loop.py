@@ -16,6 +16,7 @@ the coordinate while the commanded configuration holds. The source is fixed for 
 from __future__ import annotations
 
 import dataclasses
+import math
 import time as wallclock
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -123,6 +124,7 @@ class StepResult:
     start_time: float
     end_time: float
     status: str
+    reason: str = ""
 
     @property
     def reached(self) -> bool:
@@ -225,6 +227,8 @@ class _StepTracker:
         self.start_time = 0.0
         self._nominal: np.ndarray | None = None
         self._within_since: float | None = None
+        self.fresh = False
+        """Whether the current step has not been controlled yet (the estimated statics judge it then)."""
 
     @property
     def step(self) -> Step:
@@ -242,10 +246,12 @@ class _StepTracker:
             return np.array([estimate.theta_o, estimate.s_h, estimate.s_g])
         return None
 
-    def advance(self, now: float, estimate: Estimate, hand_pose: np.ndarray, status: str) -> None:
+    def advance(
+        self, now: float, estimate: Estimate, hand_pose: np.ndarray, status: str, reason: str = ""
+    ) -> None:
         if self.index >= 0:
             self.results.append(
-                StepResult(self.index, self.step.kind, self.step.delta, self.start_time, now, status)
+                StepResult(self.index, self.step.kind, self.step.delta, self.start_time, now, status, reason)
             )
         self.index += 1
         if self.done:
@@ -264,6 +270,7 @@ class _StepTracker:
         self.command = Command(self.step.motion, targets, start=current, wrench=np.array(estimate.wrench))
         self.start_time = now
         self._within_since = None
+        self.fresh = True
 
     def update(self, now: float, estimate: Estimate, hand_pose: np.ndarray) -> None:
         """Move to the next step when this one is reached or timed out."""
@@ -435,11 +442,30 @@ class _Loop:
             estimate, float(hand_pose[2]), tracker.command.motion, self.params.hand.force_limits,
             p.normal_force, p.statics_margin,
         )
+        if tracker.fresh and tracker.step.kind != "hold":
+            reason = self._ruled_out(aim, estimate, hand_pose)
+            if reason:
+                tracker.advance(self.plant.time, estimate, hand_pose, "infeasible", reason)
+                return
+        tracker.fresh = False
         output = self.controller.update(control_input(estimate, hand_pose, coordinates, aim), tracker.command)
         self.last_solution = (output.solution.slack, output.solution.feasible)
         self.velocity = geometry.twist_hand_to_world(hand_pose[2], output.step) / self.controller.period
         if self.on_tick is not None:
             self.on_tick(self.plant.time, tracker.index, len(self.schedule.steps))
+
+    def _ruled_out(self, aim: StaticsTarget, estimate: Estimate, hand_pose: np.ndarray) -> str:
+        """Why the step just begun is not to be forced ("" if it is): beyond the robot's reach, or
+        ruled out by the estimated statics."""
+        step, low_high = self.tracker.step, self.plant.hand_angle_range
+        if step.kind == "pivot":
+            end = float(hand_pose[2]) + step.delta
+            if not low_high[0] <= end <= low_high[1]:
+                low, high, to = (math.degrees(a) for a in (*low_high, end))
+                return f"beyond the robot's reach: θ_h {to:.1f}° not in [{low:.1f}°, {high:.1f}°]"
+        if aim.margin < -self.params.controller_params.infeasible_margin:
+            return _ruled_out(aim, estimate)
+        return ""
 
     def _contact_lost(self) -> bool:
         """Whether the hand has lost the object: after a grace time the target presses along ``e_n``
@@ -484,6 +510,15 @@ class _Loop:
             self.writer.meta["message"] = self.message
             self.writer.close(status=self.status)
         return result
+
+
+def _ruled_out(aim: StaticsTarget, estimate: Estimate) -> str:
+    """Why the estimated statics rule a step out, in one line (degrees, millimetres, newtons)."""
+    margin = "no wrench at all" if math.isinf(aim.margin) else f"best margin {aim.margin:.1f} N"
+    return (
+        f"ruled out by the estimated statics: {margin} at θ̂_o {math.degrees(estimate.theta_o):.1f}°, "
+        f"ŝ_h {1e3 * estimate.s_h:.1f} mm (μ̂_h {estimate.mu_h:.2f})"
+    )
 
 
 def _sample(plant, measurement, estimate, target, tracker, slack, feasible) -> dict[str, np.ndarray]:

@@ -96,6 +96,8 @@ class ControllerParams:
             estimated statics allow it (:func:`ccopt.statics.regulation_wrench`).
         statics_margin_share: the share of that margin the QP's rows keep at most (the rows' own
             margins above apply where they are smaller).
+        infeasible_margin: a step whose estimated statics margin is below ``−infeasible_margin`` (N)
+            when it starts is not forced: it ends ``infeasible`` with the reason.
         length_unit, angle_unit, force_unit: the units in which the QP weighs its terms and its
             step (m, rad, N): an error of one unit costs its weight, a step of one unit the
             regularisation. A millimetre, a degree and a newton: the scales the task is judged on.
@@ -124,6 +126,7 @@ class ControllerParams:
     slide_onset: float = 0.001
     statics_margin: float = 3.0
     statics_margin_share: float = 0.5
+    infeasible_margin: float = 1.0
     length_unit: float = 1e-3
     angle_unit: float = math.radians(1.0)
     force_unit: float = 1.0

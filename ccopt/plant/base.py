@@ -136,6 +136,8 @@ class Plant(Protocol):
     """Simulation step, s."""
     params: PlantParams
     hand: Hand
+    hand_angle_range: tuple[float, float]
+    """The hand angles ``θ_h`` (rad) the robot reaches; a target outside is refused."""
 
     def set_target(self, pose: ArrayLike, velocity: ArrayLike | None = None) -> None:
         """Hand impedance target, world ``(x, y, θ)`` (m, rad), with optional velocity feed-forward."""

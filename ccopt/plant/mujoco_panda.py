@@ -30,6 +30,7 @@ the F/T reading and the contacts are those MuJoCo computed at the start of the l
 
 from __future__ import annotations
 
+import functools
 import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
@@ -50,6 +51,11 @@ from panda_model.impedance import OUT_OF_PLANE_STIFFNESS, ImpedanceGains, impeda
 from panda_model.model import TASK_AXES, Panda, hand_rotation, inverse_kinematics, load_panda, planar_pose
 from panda_model.urdf import ARM_JOINTS, FLANGE_LINK, arm_urdf
 from panda_model.wrench import hand_wrench
+
+JOINT_MARGIN = 0.1
+"""rad: how far inside its limits every joint must stay for a hand angle to count as reachable."""
+ANGLE_PROBE = math.radians(2.5)
+"""rad: the step in which :attr:`PandaPlant.hand_angle_range` probes the reachable hand angles."""
 
 HAND_BODY = "hand_plate"
 HAND_SITE = "hand_face"
@@ -193,6 +199,7 @@ class PandaPlant(MujocoPlant):
         self.plate = hand_plate(self.hand, self.params)
         self.panda: Panda = load_panda(self.plate, self.panda_params.mount, self.panda_params.armature)
         object_pose, start_hand, target = start_poses(self.obj, self.start, self.hand)
+        self.start_hand_pose = start_hand
         q_start = inverse_kinematics(self.panda, start_hand)
 
         self._load(panda_model_xml(self.obj, self.params, self.panda_params, self.hand))
@@ -256,6 +263,28 @@ class PandaPlant(MujocoPlant):
     def target(self) -> np.ndarray:
         """Current impedance target, world ``(x, y, θ)``."""
         return self._target.copy()
+
+    @functools.cached_property
+    def hand_angle_range(self) -> tuple[float, float]:
+        """Hand angles ``θ_h`` (rad) the arm reaches at the start position with every joint
+        :data:`JOINT_MARGIN` inside its limits, found by inverse kinematics from the start outwards in
+        :data:`ANGLE_PROBE` steps (a target outside is refused by the loop before the arm gets there)."""
+        start = self.start_hand_pose
+        lower = self.panda.model.lowerPositionLimit + JOINT_MARGIN
+        upper = self.panda.model.upperPositionLimit - JOINT_MARGIN
+        ends = []
+        for sign in (-1.0, 1.0):
+            seed, angle = self._posture.copy(), float(start[2])
+            while abs(angle - start[2]) < math.pi / 2:
+                try:
+                    q = inverse_kinematics(self.panda, [start[0], start[1], angle + sign * ANGLE_PROBE], seed)
+                except ValueError:
+                    break
+                if np.any(q < lower) or np.any(q > upper):
+                    break
+                seed, angle = q, angle + sign * ANGLE_PROBE
+            ends.append(angle)
+        return ends[0], ends[1]
 
     def _advance(self, n_steps: int) -> None:
         """``n_steps`` 1-kHz control-and-physics steps."""

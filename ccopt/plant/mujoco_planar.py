@@ -9,6 +9,8 @@ centre, in world axes; gravity is compensated.
 
 from __future__ import annotations
 
+import math
+
 import mujoco
 import numpy as np
 from numpy.typing import ArrayLike
@@ -23,6 +25,9 @@ from ccopt.plant.placement import start_poses
 
 HAND_BODY = "hand"
 HAND_JOINTS = ("hand_x", "hand_z", "hand_theta")
+HAND_ANGLE_RANGE = (-math.radians(75.0), math.radians(75.0))
+"""rad: the hand angles the planar hand may take (its joints have no limits; beyond, the hand lies too
+close to the ground to press)."""
 
 
 def hand_body_xml(hand: Hand, params: PlantParams) -> str:
@@ -103,6 +108,11 @@ class PlanarPlant(MujocoPlant):
         self._data.qpos[self._hand_qpos] = hand_pose
         mujoco.mj_forward(m, self._data)
         self._settle(target)
+
+    @property
+    def hand_angle_range(self) -> tuple[float, float]:
+        """The hand angles ``θ_h`` (rad) this plant may take (:data:`HAND_ANGLE_RANGE`)."""
+        return HAND_ANGLE_RANGE
 
     def _settle(self, target: np.ndarray) -> None:
         """Press towards ``target`` for the settle time, correcting the target once halfway so that
