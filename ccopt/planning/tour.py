@@ -11,11 +11,22 @@ agrees up to its own margin).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
-from ccopt.planning.graph import ConfigurationGraph, Edge, Node
+import numpy as np
+
+from ccopt import geometry, statics
+from ccopt.objects import PlanarObject
+from ccopt.planning.graph import ConfigurationGraph, Edge, GraphParams, Node
+from ccopt.plant import placement
+from ccopt.plant.base import StartConfig
 from ccopt.schedule import Schedule, Step, hold
+
+if TYPE_CHECKING:
+    from ccopt.closed_loop import LoopParams
 
 SLIDE_KINDS = ("slide_hand", "slide_ground")
 
@@ -69,7 +80,7 @@ def possible_tour(
     slides: int = 4,
     name: str = "possible-tour",
     timeout: float = 10.0,
-    ground_span: float = 0.03,
+    ground_span: float = 0.05,
 ) -> Tour:
     """At least ``steps`` possible steps from the graph's start with up to ``slides`` hand slides and
     ``slides`` ground slides (alternating their way where both ways exist), or as many as the object
@@ -134,3 +145,60 @@ def _route_to_slide(graph: ConfigurationGraph, source: Node, kind: str, sign: in
         return None
     end = path[-1].target if path else source
     return [*path, slide_from(end)]
+
+
+def vertex_range(
+    obj: PlanarObject, start: StartConfig, step: float = math.radians(0.5)
+) -> tuple[float, float]:
+    """The face angles ``θ_o`` (rad) over which the object keeps resting on the vertex it starts on
+    (the experimenter's geometry: beyond, another vertex touches the ground)."""
+    def vertex(theta: float) -> int:
+        angle = geometry.object_angle_for_face(obj.face_normal(obj.face_index(start.hand_face)), theta)
+        return geometry.lowest_vertex(geometry.transform_points(obj.vertices, (0.0, 0.0, angle)))
+
+    first = vertex(start.theta_o)
+    ends = []
+    for sign in (-1.0, 1.0):
+        theta = start.theta_o
+        while abs(theta - start.theta_o) < math.pi and vertex(theta + sign * step) == first:
+            theta += sign * step
+        ends.append(theta)
+    return ends[0], ends[1]
+
+
+def plan_tour(
+    obj: PlanarObject,
+    params: LoopParams,
+    angle_range: tuple[float, float],
+    margin: float = 1.0,
+    candidates: int = 7,
+    **tour_options: object,
+) -> tuple[LoopParams, Tour]:
+    """The experimenter's schedule for ``obj``: among start positions ``s_h`` of the hand along its
+    face (``candidates`` of them, at the run's start tilt), the one whose :func:`possible_tour` holds
+    the most slides (up to the number asked for of each kind), with the loop parameters that start
+    there. ``angle_range`` is the robot's reach in ``θ_h`` (rad); the object's own vertex range and
+    ``5°`` of clearance narrow it. Uses the true object: never for the estimator or the controller."""
+    base = dataclasses.replace(params.start, s_h=0.0)
+    low, high = placement.face_s_h_range(obj, base)
+    inset = params.hand.half_length + 2e-3
+    if high - low < 2.0 * inset:
+        raise ValueError(f"the hand does not fit on face {base.hand_face} of {obj.name}")
+    tilt_low, tilt_high = vertex_range(obj, base)
+    clearance = math.radians(5.0)
+    theta_range = (max(angle_range[0], tilt_low + clearance), min(angle_range[1], tilt_high - clearance))
+    wanted = int(tour_options.get("slides", 4))
+    best: tuple[int, LoopParams, Tour] | None = None
+    for s_h in np.linspace(low + inset, high - inset, candidates):
+        start = dataclasses.replace(base, s_h=float(s_h))
+        trial = dataclasses.replace(params, start=start, centre_hand=False)
+        truth = statics.true_statics(obj, start, params.hand)
+        graph_params = GraphParams(s_h_range=truth.s_h_range, theta_range=theta_range, min_margin=margin)
+        hand = params.hand
+        where = (truth.theta_o, truth.s_h)
+        graph = ConfigurationGraph(truth.statics, where, hand.half_length, hand.force_limits, graph_params)
+        tour = possible_tour(graph, **tour_options)
+        score = sum(min(tour.counts[kind], wanted) for kind in SLIDE_KINDS)
+        if best is None or score > best[0]:
+            best = (score, trial, tour)
+    return best[1], best[2]
