@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 
 from ccopt import geometry, validation
+from ccopt.contact import GROUND_ROWS
 from ccopt.control.controller import Command, ControlInput, Controller, ControllerParams
 from ccopt.control.targets import UNJUDGED, StaticsTarget, statics_target
 from ccopt.estimation.estimator import Estimate, Estimator, EstimatorParams
@@ -184,7 +185,8 @@ def control_input(
     """What the controller reads from an estimate, the measured hand pose, the progress source and the
     estimated statics' target."""
     return ControlInput(
-        **{name: getattr(estimate, name) for name in _FROM_ESTIMATE},
+        **{name: getattr(estimate, name) for name in _FROM_ESTIMATE if name != "row_valid"},
+        row_valid=enforced_rows(estimate),
         l_h=estimate.torque_lever,
         hand_angle=float(hand_pose[2]),
         kinematics_valid=kinematics_usable(estimate),
@@ -193,6 +195,16 @@ def control_input(
         tangential_target=target.tangential,
         statics_margin=target.margin if target.force is not None else None,
     )
+
+
+def enforced_rows(estimate: Estimate) -> np.ndarray:
+    """The cone rows the controller keeps (where its command keeps them): the estimated ones, but of
+    the ground only those fitted to a friction face. A row at the extent of the data seen so far is
+    no friction boundary: keeping it would hold the hand force where it has been and block every new
+    tilt, while the mode classifier stays conservative about it all the same."""
+    enforced = np.array(estimate.row_valid, dtype=bool)
+    enforced[list(GROUND_ROWS)] &= np.asarray(estimate.ground_fitted, dtype=bool)
+    return enforced
 
 
 def kinematics_usable(estimate: Estimate) -> bool:

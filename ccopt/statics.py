@@ -108,6 +108,9 @@ class ObjectStatics:
         ground_bounds: ``b`` (2,), N (the weight is inside them).
         d: distance from the ground contact to the hand face along ``e_n``, m.
         gravity: the weight's moment about the ground contact.
+        ground_known: per ground row, whether it is known (an estimate's row fitted to a friction
+            face; a conservative row at the extent of the data is not): unknown rows bind nothing,
+            and a slide whose boundary is unknown cannot be judged (its margin is NaN).
     """
 
     mu_h: float
@@ -115,6 +118,7 @@ class ObjectStatics:
     ground_bounds: np.ndarray
     d: float
     gravity: GravityMoment
+    ground_known: tuple[bool, bool] = (True, True)
 
     def __post_init__(self) -> None:
         rows = np.array(self.ground_rows, dtype=float)
@@ -147,7 +151,8 @@ class StaticsResult:
 
     Attributes:
         margin: the largest smallest kept-row margin (N); ``-inf`` where no wrench satisfies the
-            equilibrium, the force limits and the motion's sliding limit at all.
+            equilibrium, the force limits and the motion's sliding limit at all; NaN where the
+            motion's boundary is unknown (:attr:`ObjectStatics.ground_known`).
         wrench: the hand wrench ``(f_n, f_t, τ)`` achieving it (N, N, N·m), None where none exists.
     """
 
@@ -258,7 +263,16 @@ def _solve(
     nominal_force: float = 0.0,
 ) -> StaticsResult:
     keep, lba, uba = _BOUNDS[motion]
+    known = zip(contact.GROUND_ROWS, statics.ground_known, strict=True)
+    unknown = [int(row) for row, is_known in known if not is_known]
+    if any(row in modes.REMOVED_ROWS[motion] for row in unknown):
+        return StaticsResult(math.nan, None)
+    if unknown:
+        keep, uba = keep.copy(), uba.copy()
+        keep[unknown] = 0.0
+        uba[unknown] = np.inf
     lba = lba.copy()
+    lba[unknown] = -np.inf
     lba[-2:] = (-nominal_force, nominal_force)
     f_min, f_max = force_limits
     lbx = np.array([f_min, -_BIG, -_BIG, least_margin, -_BIG])

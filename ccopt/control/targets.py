@@ -64,7 +64,8 @@ def estimated_statics(estimate: Estimate, hand_angle: float) -> statics.ObjectSt
     rows, bounds = np.asarray(estimate.ground_rows), np.asarray(estimate.ground_bounds)
     if not (np.all(np.isfinite(rows)) and np.all(np.isfinite(bounds))):
         return None
-    return statics.ObjectStatics(estimate.mu_h, rows, bounds, estimate.d, gravity)
+    known = tuple(estimate.ground_fitted)
+    return statics.ObjectStatics(estimate.mu_h, rows, bounds, estimate.d, gravity, known)
 
 
 def statics_target(
@@ -89,6 +90,8 @@ def statics_target(
         nominal_force,
         margin_goal,
     )
+    if math.isnan(result.margin):
+        return UNJUDGED
     if result.wrench is None or result.margin < 0.0:
         return StaticsTarget(None, None, result.margin if result.wrench is not None else -math.inf)
     f_n, f_t, _ = result.wrench

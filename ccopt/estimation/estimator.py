@@ -121,6 +121,8 @@ class Estimate:
         ground_rows, ground_bounds: ground rows ``A f ≤ b`` on the world hand force (2×2 unit
             normals, 2 offsets in N), rows ``GROUND_SLIDE_POS``, ``GROUND_SLIDE_NEG``.
         mu_g: ground friction coefficient from the two fitted faces (NaN until both are fitted).
+        ground_fitted: per ground row, whether it was fitted to a friction face of the hull (the
+            ground slid that way), rather than a conservative row at the extent of the data.
         hand_mode, hand_geometry, ground_mode: the classified contact configuration.
         in_contact: whether the hand touches the object (``f_n > contact_force``).
         theta_o, s_h, s_g, d, r_o: the kinematics (rad, m), NaN where not estimated.
@@ -140,6 +142,7 @@ class Estimate:
     ground_rows: np.ndarray
     ground_bounds: np.ndarray
     mu_g: float
+    ground_fitted: tuple[bool, bool]
     hand_mode: ContactMode
     hand_geometry: HandGeometry
     ground_mode: ContactMode
@@ -319,6 +322,7 @@ def _assemble(
         ground_rows=ground.A,
         ground_bounds=ground.b,
         mu_g=ground.mu_g,
+        ground_fitted=tuple(ground.fitted),
         **{name: getattr(modes, name) for name in _MODE_FIELDS},
         in_contact=in_contact,
         theta_o=theta_o,

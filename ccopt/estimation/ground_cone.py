@@ -46,9 +46,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ccopt.estimation.quantile import P2QuantileBank, check_count, check_level, check_number
+from ccopt.geometry import WORLD_UP
 
-WORLD_UP = (0.0, 1.0)
-"""World up (against gravity), unit: it splits the hull into its two sides and marks its top."""
 _TIME_TOLERANCE = 1e-9
 """Intervals are compared with this slack (s), so that sample times with rounding errors still count."""
 FACE_COSINE_RANGE = (-0.2, math.cos(math.radians(15.0)))
