@@ -325,6 +325,7 @@ class Supervision:
         time_factor: a run's time limit is this times the sum of its steps' timeouts (the schedule's
             own worst case), at least ``min_time``.
         min_time: the smallest time limit.
+        max_time: a time limit given outright (s of simulated time), None for the one above.
         health_tolerance, health_hold: the force disagreement (N) between the F/T sensor and the
             impedance that a run tolerates, and for how long (s), before it is a sensor fault
             (:mod:`ccopt.health`). The hand's inertia makes the two differ while it accelerates: up to
@@ -340,6 +341,14 @@ class Supervision:
     min_time: float = 10.0
     health_tolerance: float = 6.0
     health_hold: float = 0.1
+    max_time: float | None = None
+
+    def __post_init__(self) -> None:
+        names = ("contact_force", "contact_grace", "recontact_speed", "recontact_distance")
+        for name in (*names, "time_factor", "min_time", "health_tolerance", "health_hold"):
+            validation.positive(name, getattr(self, name))
+        if self.max_time is not None and not 0.0 < validation.real("max_time", self.max_time) <= 1e6:
+            raise ValueError(f"max_time must be in (0, 1e6] s, got {self.max_time!r}")
 
     def health(self, hand: Hand) -> HealthParams:
         """The sensor-health check of a run with ``hand``: its impedance, and a force disagreement
@@ -350,6 +359,8 @@ class Supervision:
 
     def time_limit(self, schedule: Schedule) -> float:
         """The simulated time after which a run of ``schedule`` ends with status ``timeout``."""
+        if self.max_time is not None:
+            return self.max_time
         return max(self.min_time, self.time_factor * sum(step.timeout for step in schedule.steps))
 
 
