@@ -21,8 +21,13 @@ from numpy.typing import ArrayLike
 
 from ccopt import geometry
 
-MIN_EDGE = 1e-3
-"""Shortest admissible face, m."""
+MIN_EDGE = 0.01
+MAX_EDGE = 1.0
+"""Shortest and longest admissible face, m: ccopt handles objects from 1 cm to 1 m (a hand, a table)."""
+MASS_RANGE = (1e-3, 100.0)
+"""Lightest and heaviest admissible object, kg."""
+MAX_FRICTION = 10.0
+"""Largest admissible friction coefficient (real materials stay below about 2)."""
 
 DEFAULT_MU_HAND = 0.5
 DEFAULT_MU_GROUND = 0.8
@@ -38,8 +43,8 @@ def _check_real(name: str, value: object) -> float:
 
 def _check_friction(name: str, value: object) -> float:
     mu = _check_real(name, value)
-    if not math.isfinite(mu) or mu < 0.0:
-        raise ValueError(f"{name} must be a finite, non-negative friction coefficient, got {mu!r}")
+    if not 0.0 <= mu <= MAX_FRICTION:
+        raise ValueError(f"{name} must be a friction coefficient in [0, {MAX_FRICTION:g}], got {mu!r}")
     return mu
 
 
@@ -55,11 +60,12 @@ def _check_vertices(vertices: object) -> np.ndarray:
         raise ValueError(f"an object needs at least 3 vertices, got {poly.shape[0]}")
     if not np.all(np.isfinite(poly)):
         raise ValueError(f"vertices must be finite, got {poly.tolist()}")
-    edges = np.linalg.norm(np.roll(poly, -1, axis=0) - poly, axis=1)
-    if edges.min() < MIN_EDGE:
+    edges = np.hypot(*(np.roll(poly, -1, axis=0) - poly).T)
+    if not (np.all(np.isfinite(edges)) and edges.min() >= MIN_EDGE and edges.max() <= MAX_EDGE):
+        worst = edges.min() if edges.min() < MIN_EDGE else edges.max()
         raise ValueError(
-            f"every face must be at least {MIN_EDGE} m long, got a face of {edges.min():.3g} m "
-            f"in vertices {poly.tolist()}"
+            f"every face must be {MIN_EDGE:g} m to {MAX_EDGE:g} m long (objects from 1 cm to 1 m), "
+            f"got a face of {worst:.3g} m in vertices {poly.tolist()}"
         )
     if not geometry.is_convex(poly):
         raise ValueError(f"vertices must form a convex, simple polygon, got {poly.tolist()}")
@@ -79,14 +85,15 @@ class PlanarObject:
         vertices: ``(n, 2)`` vertices in the body frame (m). On construction they are validated,
             silently re-ordered counter-clockwise if given clockwise, and shifted so that the
             body-frame origin is the area centroid. The stored array is read-only.
-        mass: kg, positive.
-        mu_hand: hand/object Coulomb friction coefficient, non-negative.
-        mu_ground: object/ground Coulomb friction coefficient, non-negative.
+        mass: kg, in :data:`MASS_RANGE`.
+        mu_hand: hand/object Coulomb friction coefficient, in [0, :data:`MAX_FRICTION`].
+        mu_ground: object/ground Coulomb friction coefficient, in [0, :data:`MAX_FRICTION`].
 
     Raises:
         TypeError: a field has the wrong type.
         ValueError: fewer than 3 vertices, non-finite or non-convex vertices, a face shorter
-            than :data:`MIN_EDGE`, non-positive mass, negative or NaN friction.
+            than :data:`MIN_EDGE` or longer than :data:`MAX_EDGE`, a mass outside
+            :data:`MASS_RANGE`, friction outside [0, :data:`MAX_FRICTION`] or NaN.
     """
 
     name: str
@@ -99,8 +106,9 @@ class PlanarObject:
         if not isinstance(self.name, str):
             raise TypeError(f"name must be a string, got {type(self.name).__name__}")
         mass = _check_real("mass", self.mass)
-        if not math.isfinite(mass) or mass <= 0.0:
-            raise ValueError(f"mass must be a positive, finite number of kg, got {mass!r}")
+        low, high = MASS_RANGE
+        if not low <= mass <= high:
+            raise ValueError(f"mass must be a positive number of kg in [{low:g}, {high:g}], got {mass!r}")
         object.__setattr__(self, "mass", mass)
         object.__setattr__(self, "mu_hand", _check_friction("mu_hand", self.mu_hand))
         object.__setattr__(self, "mu_ground", _check_friction("mu_ground", self.mu_ground))

@@ -19,6 +19,7 @@ in the paper's increments of 7.2°, 10 mm and 10 mm) and ``smoke`` (pivots both 
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -32,6 +33,10 @@ PIVOT_STEP = np.deg2rad(7.2)
 SLIDE_STEP = 0.010
 DEFAULT_TOLERANCE = {"pivot": np.deg2rad(0.7), "slide_hand": 0.0015, "slide_ground": 0.0015, "hold": 0.0}
 DEFAULT_TIMEOUT = 8.0
+MAX_TIMEOUT = 3600.0
+"""Longest step (a hold's duration, a step's timeout), s."""
+MAX_DELTA = {"pivot": np.pi, "slide_hand": 1.0, "slide_ground": 1.0, "hold": 0.0}
+"""Largest increment and tolerance of a step, rad (half a turn) or m (the longest face of an object)."""
 
 
 @dataclass(frozen=True)
@@ -43,6 +48,10 @@ class Step:
         delta: increment of the coordinate, rad (pivot) or m (slides); 0 for a hold.
         tolerance: the step is done when the estimated error is below this (rad or m).
         timeout: the step gives up after this long, s (a hold lasts exactly this long).
+
+    Raises ``ValueError`` naming the value: an unknown kind, a number that is not finite, a zero
+    increment or tolerance, a timeout not in (0, :data:`MAX_TIMEOUT`], an increment or tolerance
+    beyond :data:`MAX_DELTA`.
     """
 
     kind: Kind
@@ -54,15 +63,19 @@ class Step:
         if self.kind not in KINDS:
             raise ValueError(f"unknown step kind {self.kind!r}; expected one of: {', '.join(KINDS)}")
         for name in ("delta", "tolerance", "timeout"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int | float) or not np.isfinite(value):
-                raise ValueError(f"step {name} must be a finite number, got {value!r}")
+            _number(getattr(self, name), f"step {name}")
         if self.kind != "hold" and self.delta == 0.0:
             raise ValueError(f"a {self.kind} step needs a non-zero increment")
         if self.kind != "hold" and self.tolerance <= 0.0:
             raise ValueError(f"step tolerance must be positive, got {self.tolerance!r}")
-        if self.timeout <= 0.0:
-            raise ValueError(f"step timeout must be positive, got {self.timeout!r}")
+        if not 0.0 < self.timeout <= MAX_TIMEOUT:
+            raise ValueError(f"step timeout must be in (0, {MAX_TIMEOUT:g}] s, got {self.timeout!r}")
+        largest, unit = MAX_DELTA[self.kind], "rad" if self.kind == "pivot" else "m"
+        for name in ("delta", "tolerance"):
+            value = getattr(self, name)
+            if abs(value) > largest:
+                limit = f"{largest:.4g} {unit}"
+                raise ValueError(f"a {self.kind} step's {name} must be at most {limit}, got {value!r}")
 
     @property
     def motion(self) -> Motion:
@@ -155,14 +168,20 @@ def load_schedule(name_or_path: str | Path) -> Schedule:
             f"unknown schedule {text!r}: not a built-in ({', '.join(BUILTIN)}) nor a .json/.yaml file"
         )
     try:
-        raw = path.read_text()
+        raw = path.read_text(encoding="utf-8")
     except OSError as error:
         raise ValueError(f"cannot read schedule file {text!r}: {error.strerror}") from None
+    except UnicodeDecodeError:
+        raise ValueError(f"schedule file {text!r} is not a text file (UTF-8)") from None
     try:
         content = json.loads(raw) if path.suffix.lower() == ".json" else yaml.safe_load(raw)
-    except (json.JSONDecodeError, yaml.YAMLError) as error:
-        raise ValueError(f"schedule file {text!r} is malformed: {str(error).splitlines()[0]}") from None
-    return schedule_from_dict(content, default_name=path.stem)
+    except (ValueError, RecursionError, yaml.YAMLError) as error:  # ValueError: a number of 5,000 digits
+        reason = str(error).splitlines()[0] if str(error) else type(error).__name__
+        raise ValueError(f"schedule file {text!r} is malformed: {reason}") from None
+    try:
+        return schedule_from_dict(content, default_name=path.stem)
+    except ValueError as error:
+        raise ValueError(f"schedule file {text!r}: {error}") from None
 
 
 def schedule_from_dict(content: object, default_name: str = "custom") -> Schedule:
@@ -171,7 +190,7 @@ def schedule_from_dict(content: object, default_name: str = "custom") -> Schedul
         raise ValueError("a schedule must be a mapping with a list under 'steps'")
     unknown = set(content) - {"name", "steps"}
     if unknown:
-        raise ValueError(f"unknown schedule key(s): {', '.join(sorted(unknown))}")
+        raise ValueError(f"unknown schedule key(s): {_keys(unknown)}")
     steps = tuple(_step_from_dict(index, entry) for index, entry in enumerate(content["steps"]))
     return Schedule(str(content.get("name", default_name)), steps)
 
@@ -215,13 +234,25 @@ def _step_from_dict(index: int, entry: object) -> Step:
 def _only(entry: dict, allowed: set[str], where: str) -> None:
     unknown = set(entry) - allowed
     if unknown:
-        raise ValueError(f"{where}: unknown key(s) {', '.join(sorted(unknown))}")
+        raise ValueError(f"{where}: unknown key(s) {_keys(unknown)}")
+
+
+def _keys(keys: set[object]) -> str:
+    """Keys of any types (a YAML mapping may mix them), sorted, for a message."""
+    return ", ".join(sorted(str(key) for key in keys))
 
 
 def _number(value: object, name: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float) or not np.isfinite(value):
+    """``value`` as a finite float; ``ValueError`` naming ``name`` and the value otherwise."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
         raise ValueError(f"{name} must be a finite number, got {value!r}")
-    return float(value)
+    try:
+        number = float(value)
+    except OverflowError:
+        raise ValueError(f"{name} must be a finite number, got an integer beyond 1.8e308") from None
+    if not math.isfinite(number):
+        raise ValueError(f"{name} must be a finite number, got {value!r}")
+    return number
 
 
 def _step_to_dict(step: Step) -> dict[str, object]:
