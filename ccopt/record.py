@@ -79,17 +79,50 @@ def prepare_folder(folder: str | Path, overwrite: bool = False) -> Path:
 def _create_writable(path: Path) -> None:
     """Create ``path`` (and its parents) and write a probe file in it; ``OSError`` after removing
     the folders it created if that fails."""
-    missing = [p for p in (path, *path.parents) if not p.exists()]  # deepest first
+    missing = missing_folders(path)
     try:
         path.mkdir(parents=True, exist_ok=True)
         probe = path / ".write_probe"
         probe.write_text("")
         probe.unlink()
     except OSError:
-        for created in missing:
-            with contextlib.suppress(OSError):  # not created, or not empty: not ours to remove
-                created.rmdir()
+        remove_empty_folders(missing)
         raise
+
+
+def missing_folders(folder: str | Path) -> list[Path]:
+    """``folder`` and its parents that do not exist (what :func:`prepare_folder` creates), deepest
+    first."""
+    path = Path(folder)
+    return [p for p in (path, *path.parents) if not p.exists()]
+
+
+def remove_empty_folders(folders: list[Path]) -> None:
+    """Remove each of ``folders`` (deepest first) that exists and is empty; leave the others."""
+    for folder in folders:
+        with contextlib.suppress(OSError):  # gone, or not empty: not ours to remove
+            folder.rmdir()
+
+
+def discard_unstarted(folder: str | Path) -> bool:
+    """Remove the files of a run that recorded no sample (it was stopped or failed while starting):
+    ``meta.json``, the empty chunks folder, a write probe. Returns whether nothing of the run is left
+    (also when the folder does not exist); a folder holding samples, or anything a run does not
+    write, is left as it is."""
+    path = Path(folder)
+    if not path.is_dir():
+        return True
+    if (path / "record.npz").exists() or _chunk_files(path):
+        return False
+    try:
+        entries = _previous_run_files(path, overwrite=True)
+    except ValueError:  # something not written by a run: not ours to remove
+        return False
+    for entry in entries:
+        entry.unlink(missing_ok=True)
+    with contextlib.suppress(OSError):  # absent, or not empty
+        (path / CHUNKS).rmdir()
+    return True
 
 
 def _previous_run_files(path: Path, overwrite: bool) -> list[Path]:
@@ -278,7 +311,8 @@ def load_record(folder: str | Path) -> Record:
     to that run, else from that run's chunks (an interrupted or killed run).
 
     ``ValueError`` with one line naming the folder or file if it is not a run folder or a file is
-    truncated or malformed. A folder written before runs had a ``run_id`` reads as it always did.
+    truncated or malformed (its arrays not all one row per sample). A folder written before runs had
+    a ``run_id`` reads as it always did.
     """
     path = Path(folder)
     if not (path / "meta.json").is_file():
@@ -289,9 +323,18 @@ def load_record(folder: str | Path) -> Record:
         raise ValueError(f"{str(path / 'meta.json')!r} has a run_id that is not a string: {run_id!r}")
     consolidated = path / "record.npz"
     data = _read_npz(consolidated, run_id) if consolidated.is_file() else None
+    source = consolidated
     if data is None:
         chunks = _chunk_files(path)
         data = _concatenate([_read_npz(chunk, run_id) for chunk in chunks], chunks)
+        source = path / CHUNKS
+    rows = {key: value.shape[0] if value.ndim else None for key, value in data.items()}
+    first = next(iter(rows), None)
+    for key, count in rows.items():
+        if count != rows[first]:
+            raise ValueError(
+                f"{str(source)!r} is not one time series: {key!r} has {count} rows, {first!r} {rows[first]}"
+            )
     summary_path = path / "summary.json"
     summary = _read_json_object(summary_path) if summary_path.is_file() else None
     return Record(path, data, meta, summary)
