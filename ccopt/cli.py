@@ -6,7 +6,9 @@
     ccopt bench qp_latency --quick
 
 Degrees and millimetres at the command line (vertices in mm), SI inside. Bad input gets one line
-naming the bad value and exit status 2; Ctrl-C during a run keeps the record written so far.
+naming the bad value and exit status 2, and leaves no run folder behind. Ctrl-C, SIGTERM and SIGHUP
+stop a run with its record closed (status ``interrupted``, exit status 130); a second one ends the
+program at once.
 """
 
 from __future__ import annotations
@@ -19,8 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ccopt import __version__, objects, record
-from ccopt.cliutil import OneLineParser, fail, print_table
+from ccopt import __version__, objects, record, validation
+from ccopt.cliutil import INTERRUPTED, OneLineParser, fail, print_table, seed_value, stop_signals
 from ccopt.objects import PlanarObject
 from ccopt.schedule import load_schedule
 
@@ -39,6 +41,43 @@ def parse_vertices(text: str) -> np.ndarray:
     return vertices * 1e-3
 
 
+MIN_RATE = 1.0
+"""Slowest estimator or controller rate of a run, Hz."""
+
+
+def check_numbers(args: argparse.Namespace) -> None:
+    """The numbers of ``ccopt run``, each named by its flag in a ``ValueError``: finite, masses and
+    friction in range, rates from :data:`MIN_RATE` to the plant's own rate.
+
+    A run needs friction at both contacts (μ > 0): without it the hand cannot push the object
+    sideways and the object cannot pivot on the ground, and the friction estimate has nothing to
+    measure.
+    """
+    from ccopt.plant.base import PlantParams
+
+    if args.mass is not None:
+        validation.positive("--mass", args.mass)
+    if not validation.real("--added-mass", args.added_mass) >= 0.0:
+        raise ValueError(f"--added-mass must be a non-negative number of kg, got {args.added_mass!r}")
+    for flag, mu in (("--mu-hand", args.mu_hand), ("--mu-ground", args.mu_ground)):
+        if not (validation.real(flag, mu) > 0.0):
+            raise ValueError(f"{flag} must be positive (a run needs friction at both contacts), got {mu!r}")
+    top = 1.0 / PlantParams().timestep
+    for flag, rate in (("--estimator-hz", args.estimator_hz), ("--controller-hz", args.controller_hz)):
+        if not MIN_RATE <= validation.real(flag, rate) <= top:
+            raise ValueError(f"{flag} must be in [{MIN_RATE:g}, {top:g}] Hz (the plant's rate), got {rate!r}")
+
+
+def fault_value(text: str):
+    """argparse type: a sensor fault ``KIND[:VALUE][@START_S]`` (:func:`ccopt.plant.sensors.parse_fault`)."""
+    from ccopt.plant.sensors import parse_fault
+
+    try:
+        return parse_fault(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
 def build_object(args: argparse.Namespace) -> PlanarObject:
     """The object the user asked for (the controller is never told any of it)."""
     friction = {"mu_hand": args.mu_hand, "mu_ground": args.mu_ground}
@@ -54,40 +93,135 @@ def _run_parser(commands: argparse._SubParsersAction) -> None:
     shape.add_argument("--object", default="paper-triangle", help="library object name")
     shape.add_argument("--vertices", help="convex polygon 'x,y;x,y;...' in mm, counter-clockwise")
     run.add_argument("--mass", type=float, help="object mass, kg (default: the object's)")
-    run.add_argument("--added-mass", type=float, default=0.0, help="mass added to the object, kg")
-    run.add_argument("--mu-hand", type=float, default=0.5, help="hand/object friction coefficient")
-    run.add_argument("--mu-ground", type=float, default=0.8, help="object/ground friction coefficient")
+    run.add_argument("--added-mass", type=float, default=0.0, help="mass added to the object, kg (≥ 0)")
+    run.add_argument("--mu-hand", type=float, default=0.5, help="hand/object friction coefficient (> 0)")
+    run.add_argument("--mu-ground", type=float, default=0.8, help="object/ground friction coefficient (> 0)")
     run.add_argument("--plant", choices=("planar", "panda"), default="planar")
     run.add_argument("--schedule", default="paper", help="built-in name (paper, smoke) or a .yaml/.json file")
-    run.add_argument("--seed", type=int, default=0)
-    run.add_argument("--estimator-hz", type=float, default=100.0)
-    run.add_argument("--controller-hz", type=float, default=30.0)
-    run.add_argument("--out", default="runs/latest", help="run folder (created)")
+    run.add_argument("--seed", type=seed_value, default=0, help="seed of the sensor noise, in [0, 2**64)")
+    run.add_argument("--estimator-hz", type=float, default=100.0, help=f"Hz, at least {MIN_RATE:g}")
+    run.add_argument("--controller-hz", type=float, default=30.0, help=f"Hz, at least {MIN_RATE:g}")
+    run.add_argument(
+        "--fault",
+        type=fault_value,
+        action="append",
+        default=[],
+        metavar="KIND[:VALUE][@START_S]",
+        help="a sensor fault from START_S on (repeatable): dropout:P, dead-ft, stuck-ft, scale-ft:K, "
+        "bias-ft:N, spikes-ft:N, delay:S, dead-pose",
+    )
+    run.add_argument(
+        "--max-sim-s",
+        type=float,
+        metavar="S",
+        help="end the run (status timeout) after S s of simulated time (default: by the schedule)",
+    )
+    run.add_argument("--out", default="runs/latest", help="run folder, new or empty (created)")
+    run.add_argument(
+        "--overwrite", action="store_true", help="clear a previous run's files from --out first (only those)"
+    )
     run.add_argument("--no-figures", action="store_true", help="skip the figures and the GIF")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
+def run_inputs(args: argparse.Namespace):
+    """The object, schedule and loop parameters of ``ccopt run``, every argument checked (``ValueError``
+    or ``TypeError`` naming it), the hand's start on the object included: nothing is created yet."""
+    from ccopt.closed_loop import LoopParams, Supervision, start_config
+    from ccopt.plant.sensors import SensorParams
+
+    check_numbers(args)
+    obj = build_object(args)
+    schedule = load_schedule(args.schedule)
+    try:
+        supervision = Supervision(max_time=args.max_sim_s)
+    except (ValueError, TypeError) as error:
+        raise ValueError(f"--max-sim-s: {error}") from None
+    params = LoopParams(
+        plant=args.plant,
+        estimator_hz=args.estimator_hz,
+        controller_hz=args.controller_hz,
+        sensor_params=SensorParams(faults=tuple(args.fault)),
+        supervision=supervision,
+    )
+    start_config(obj, params)  # the hand must fit on the object's face
+    return obj, schedule, params
+
+
 def _command_run(args: argparse.Namespace, prog: str) -> int:
-    from ccopt import closed_loop, experiment
+    from ccopt import experiment
 
     try:
-        obj = build_object(args)
-        schedule = load_schedule(args.schedule)
-        params = closed_loop.LoopParams(
-            plant=args.plant, estimator_hz=args.estimator_hz, controller_hz=args.controller_hz
-        )
-        folder = record.prepare_folder(args.out)
+        obj, schedule, params = run_inputs(args)
     except (ValueError, TypeError) as error:
         fail(prog, str(error))
-    done = run_with_progress(experiment, obj, schedule, params, args, folder)
+    folder, created = Path(args.out), record.missing_folders(args.out)
+    try:
+        try:
+            record.prepare_folder(folder, overwrite=args.overwrite)
+        except ValueError as error:
+            fail(prog, str(error))
+        done = run_with_progress(experiment, obj, schedule, params, args, folder)
+    except KeyboardInterrupt:
+        if _discard(folder, created):
+            sys.stderr.write(f"{prog}: interrupted before the run started; nothing was recorded\n")
+        else:
+            sys.stderr.write(f"{prog}: interrupted; the record is in {folder}\n")
+        return INTERRUPTED
+    except (ValueError, TypeError) as error:  # the plant or the controller refused the input
+        if not _discard(folder, created):
+            raise
+        fail(prog, str(error))
+    status, message = done.result.status, done.result.message
     print_summary(done.summary, folder)
-    loaded = record.load_record(folder)
-    if not args.no_figures and loaded.data:
-        from ccopt import plots
+    if status == "interrupted":
+        sys.stderr.write(f"{prog}: interrupted; the record so far is in {folder} (ccopt plot draws it)\n")
+        return INTERRUPTED
+    if status != "completed":
+        sys.stderr.write(f"{prog}: {status}: {message}\n")
+    if not args.no_figures:
+        draw_figures(record.load_record(folder), folder)
+    return EXIT_CODES[status]
 
+
+def _discard(folder: Path, created: list[Path]) -> bool:
+    """Remove what a run that never started left (and the folders made for it); whether it did."""
+    if not record.discard_unstarted(folder):
+        return False
+    record.remove_empty_folders(created)
+    return True
+
+
+def draw_figures(loaded: record.Record, folder: Path) -> None:
+    """Write the run's figures and GIF into ``folder`` and list them. All or none: if the drawing is
+    interrupted (or fails), the figures it had written are removed, so none is left cut short (a GIF
+    is written frame by frame); figures it had not reached yet are left as they were."""
+    from ccopt import plots
+
+    before = _figure_files(folder)
+    drawn = False
+    try:
         paths = plots.write_figures(loaded, folder)
-        print("figures: " + ", ".join(str(p) for p in paths))
-    return EXIT_CODES[done.result.status]
+        drawn = True
+    finally:
+        if not drawn:
+            for path, identity in _figure_files(folder).items():
+                if before.get(path) != identity:
+                    path.unlink(missing_ok=True)
+    print("figures: " + ", ".join(str(p) for p in paths))
+
+
+def _figure_files(folder: Path) -> dict[Path, tuple[int, int, int]]:
+    """The figures in ``folder`` and what tells one version of a file from another (inode, size,
+    modification time)."""
+    found = {}
+    for path in (*folder.glob("*.png"), *folder.glob("*.gif")):
+        try:
+            stat = path.stat()
+        except FileNotFoundError:
+            continue
+        found[path] = (stat.st_ino, stat.st_size, stat.st_mtime_ns)
+    return found
 
 
 def run_with_progress(experiment, obj, schedule, params, args, folder):
@@ -158,10 +292,12 @@ def _command_plot(args: argparse.Namespace, prog: str) -> int:
         loaded = record.load_record(args.record)
     except ValueError as error:
         fail(prog, str(error))
-    from ccopt import plots
-
-    paths = plots.write_figures(loaded, Path(args.record))
-    print("figures: " + ", ".join(str(p) for p in paths))
+    if not loaded.data:
+        fail(prog, f"{args.record!r} holds no sample of its run (meta.json's run_id): nothing to draw")
+    try:
+        draw_figures(loaded, Path(args.record))
+    except OSError as error:
+        fail(prog, f"cannot write the figures into {args.record!r}: {error.strerror or error}")
     return 0
 
 
@@ -203,7 +339,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = make_parser().parse_args(argv)
     prog = f"ccopt {args.command}"
     handlers = {"run": _command_run, "plot": _command_plot, "study": _command_study, "bench": _command_bench}
-    return handlers[args.command](args, prog)
+    with stop_signals(prog):
+        try:
+            return handlers[args.command](args, prog)
+        except KeyboardInterrupt:
+            sys.stderr.write(f"{prog}: interrupted\n")
+            return INTERRUPTED
 
 
 if __name__ == "__main__":

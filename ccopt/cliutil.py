@@ -1,12 +1,26 @@
-"""Command-line plumbing shared by ``ccopt``'s CLI and the benchmarks: one-line errors, JSON output."""
+"""Command-line plumbing shared by ``ccopt``'s CLI, the studies and the benchmarks: one-line errors,
+argument types, the stop signals, JSON output."""
 
 from __future__ import annotations
 
 import argparse
 import json
+import signal
 import sys
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import NoReturn
+
+MAX_SEED = 2**64
+"""Seeds are integers in ``[0, MAX_SEED)``."""
+INTERRUPTED = 130
+"""Exit status of a program stopped by Ctrl-C or a stop signal (128 + SIGINT)."""
+STOP_SIGNALS = tuple(
+    getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name)
+)
+"""The signals that stop a run or a study as Ctrl-C does (:func:`stop_signals`)."""
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -20,6 +34,56 @@ def fail(prog: str, message: str) -> NoReturn:
     """Print ``prog: error: message`` on one line and exit with status 2 (bad input)."""
     sys.stderr.write(f"{prog}: error: {message}\n")
     raise SystemExit(2)
+
+
+def seed_value(value: str) -> int:
+    """argparse type: a seed, an integer in ``[0, 2**64)``."""
+    try:
+        number = int(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"seed {short(value)} is not an integer") from None
+    if not 0 <= number < MAX_SEED:
+        raise argparse.ArgumentTypeError(f"seed must be an integer in [0, 2**64), got {short(value)}")
+    return number
+
+
+def short(value: object, limit: int = 40) -> str:
+    """``repr(value)``, cut to ``limit`` characters (a 5,000-digit number named in one line)."""
+    text = repr(value)
+    return text if len(text) <= limit else f"{text[: limit - 12]}... ({len(text)} characters)"
+
+
+_stopping = threading.Event()
+"""Set by the first stop signal: the program is on its way out."""
+
+
+@contextmanager
+def stop_signals(prog: str) -> Iterator[None]:
+    """Within: SIGTERM and SIGHUP stop the program as Ctrl-C does, by ``KeyboardInterrupt`` in the main
+    thread (a run then closes its record). Once one of the three has come, the next one ends the
+    program at once and quietly: ``prog: ...`` on one line and exit status :data:`INTERRUPTED`, no
+    traceback; so that this holds to the end, the handlers are then left in place.
+
+    Outside the main thread (where handlers cannot be set) it changes nothing.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handle(signum: int, frame: object) -> None:
+        if _stopping.is_set():
+            sys.stderr.write(f"{prog}: {signal.Signals(signum).name} again: stopping now\n")
+            raise SystemExit(INTERRUPTED)
+        _stopping.set()
+        raise KeyboardInterrupt
+
+    previous = {number: signal.signal(number, handle) for number in STOP_SIGNALS}
+    try:
+        yield
+    finally:
+        if not _stopping.is_set():
+            for number, handler in previous.items():
+                signal.signal(number, handler)
 
 
 def writable_json_path(value: str) -> Path:
@@ -43,7 +107,7 @@ def benchmark_parser(name: str, doc: str, quick: str, seed: str | None = None) -
     parser.add_argument("--quick", action="store_true", help=quick)
     parser.add_argument("--json", type=writable_json_path, metavar="PATH", help="write the figures here")
     if seed is not None:
-        parser.add_argument("--seed", type=int, default=0, help=seed)
+        parser.add_argument("--seed", type=seed_value, default=0, help=seed)
     return parser
 
 

@@ -53,7 +53,7 @@ from typing import Any, TypeVar
 import numpy as np
 from tqdm import tqdm
 
-from ccopt.cliutil import OneLineParser, fail, write_json
+from ccopt.cliutil import OneLineParser, fail, seed_value, write_json
 from ccopt.closed_loop import RunResult
 from ccopt.schedule import Schedule, load_schedule
 
@@ -149,7 +149,9 @@ def study_parser(name: str, description: str, trials: bool = True) -> OneLinePar
             metavar="ADDRESS",
             help="run the trials on the Dask cluster at this address, e.g. tcp://127.0.0.1:8786",
         )
-        parser.add_argument("--seed", type=int, default=0, help="base seed of the trials (default: 0)")
+        parser.add_argument(
+            "--seed", type=seed_value, default=0, help="base seed of the trials, in [0, 2**64) (default: 0)"
+        )
         parser.add_argument("--no-progress", action="store_true", help="no progress bar")
         parser.add_argument(
             "--fresh",

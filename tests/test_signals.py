@@ -1,0 +1,103 @@
+"""Real signals sent to a real ``ccopt run``: the record is closed and loads, the exit says how, and
+nothing prints a traceback or leaves a figure cut short."""
+
+import json
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from ccopt import record
+
+
+def start(out, *args):
+    return subprocess.Popen(
+        [sys.executable, "-m", "ccopt.cli", "run", "--no-progress", "--out", str(out), *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+
+
+def wait_for(condition, process, timeout=60.0):
+    """Poll ``condition`` every millisecond until it holds; fail if the process ended first."""
+    end = time.monotonic() + timeout
+    while not condition():
+        assert process.poll() is None, process.communicate()
+        assert time.monotonic() < end, "timed out"
+        time.sleep(0.001)
+
+
+def finish(process):
+    out, err = process.communicate(timeout=60)
+    assert "Traceback" not in err and "Error" not in err, err
+    return process.returncode, out, [line for line in err.splitlines() if not line.startswith("warning:")]
+
+
+def status(out):
+    return json.loads((out / "meta.json").read_text())["status"]
+
+
+def assert_loads(out):
+    """The record loads from its files and is one run's time series."""
+    loaded = record.load_record(out)
+    time_ = loaded["time"]
+    assert len(time_) > 10 and np.all(np.diff(time_) > 0)
+    assert len(loaded["true_hand_wrench"]) == len(time_)
+    return loaded
+
+
+@pytest.mark.parametrize("number", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
+def test_a_stop_signal_during_the_run_closes_the_record(tmp_path, number):
+    out = tmp_path / "run"
+    process = start(out, "--schedule", "paper", "--no-figures")
+    wait_for(lambda: (out / "meta.json").is_file(), process)
+    time.sleep(0.3)  # into the loop
+    process.send_signal(number)
+    code, _, err = finish(process)
+    assert code == 130 and len(err) == 1 and "interrupted" in err[0], err
+    assert status(out) == "interrupted"
+    loaded = assert_loads(out)
+    assert loaded.summary["status"] == "interrupted"
+    assert (out / "record.npz").is_file() and not list((out / record.CHUNKS).iterdir())
+
+
+def test_a_second_signal_ends_at_once_and_quietly(tmp_path):
+    out = tmp_path / "run"
+    process = start(out, "--schedule", "paper", "--no-figures")
+    wait_for(lambda: (out / "meta.json").is_file(), process)
+    time.sleep(0.3)
+    process.send_signal(signal.SIGINT)
+    process.send_signal(signal.SIGTERM)
+    code, _, err = finish(process)
+    assert code == 130 and err[-1] == "ccopt run: SIGTERM again: stopping now", err
+    loaded = record.load_record(out)  # the samples not yet in a chunk may be lost: the user insisted
+    assert loaded.meta["status"] in ("interrupted", "running")
+    if loaded.meta["status"] == "interrupted":
+        assert_loads(out)
+
+
+def test_ctrl_c_while_starting_leaves_no_folder(tmp_path):
+    out = tmp_path / "new" / "run"
+    process = start(out, "--schedule", "smoke", "--plant", "panda")
+    wait_for(out.is_dir, process)
+    process.send_signal(signal.SIGINT)
+    code, _, err = finish(process)
+    assert code == 130 and err == ["ccopt run: interrupted before the run started; nothing was recorded"]
+    assert not (tmp_path / "new").exists()
+
+
+def test_ctrl_c_while_drawing_leaves_no_figure_cut_short(tmp_path):
+    out = tmp_path / "run"
+    process = start(out, "--schedule", "smoke")
+    wait_for(lambda: (out / "control.png").is_file(), process)  # the last still figure: the GIF next
+    time.sleep(1.0)  # into the GIF's frames (it takes seconds)
+    process.send_signal(signal.SIGINT)
+    code, _, err = finish(process)
+    assert code == 130 and err == ["ccopt run: interrupted"]
+    assert not list(out.glob("*.gif")) and not list(out.glob("*.png"))
+    assert status(out) == "completed"
+    assert_loads(out)
