@@ -1,4 +1,8 @@
-"""``python -m studies NAME [ARGS]``: run one study (``--help`` after NAME for its options)."""
+"""``python -m studies NAME [ARGS]``: run one study (``--help`` after NAME for its options).
+
+Ctrl-C, SIGTERM and SIGHUP stop a study alike (exit status 130, the finished trials kept in its
+``trials.jsonl``); a second one ends it at once.
+"""
 
 from __future__ import annotations
 
@@ -7,7 +11,7 @@ import importlib
 import sys
 from collections.abc import Sequence
 
-from ccopt.cliutil import OneLineParser, fail
+from ccopt.cliutil import INTERRUPTED, OneLineParser, fail, stop_signals
 from studies.runner import study_modules
 
 
@@ -19,7 +23,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.name not in names:
         fail(parser.prog, f"unknown study {args.name!r}; expected one of: {', '.join(names)}")
-    return importlib.import_module(names[args.name]).main(args.rest)
+    prog = f"{parser.prog} {args.name}"
+    with stop_signals(prog):
+        try:
+            return importlib.import_module(names[args.name]).main(args.rest)
+        except KeyboardInterrupt:
+            sys.stderr.write(f"{prog}: interrupted\n")
+            return INTERRUPTED
 
 
 if __name__ == "__main__":

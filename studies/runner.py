@@ -31,6 +31,7 @@ Each study module has ``main(argv) -> int``; :func:`study_modules` is the regist
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import dataclasses
 import functools
@@ -38,13 +39,13 @@ import json
 import multiprocessing
 import os
 import re
+import signal
 import sys
 import threading
 import time
 import traceback
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
-from contextlib import contextmanager
 from dataclasses import dataclass
 from enum import Enum
 from pathlib import Path
@@ -53,7 +54,7 @@ from typing import Any, TypeVar
 import numpy as np
 from tqdm import tqdm
 
-from ccopt.cliutil import OneLineParser, fail, seed_value, write_json
+from ccopt.cliutil import STOP_SIGNALS, OneLineParser, fail, seed_value, write_json
 from ccopt.closed_loop import RunResult
 from ccopt.schedule import Schedule, load_schedule
 
@@ -221,12 +222,38 @@ def error_line(error: BaseException) -> str:
 
 def _timed_trial(function: Trial, spec: Spec) -> tuple[dict, float]:
     """Run one trial where it is scheduled; an exception becomes an error row (never a crash)."""
+    if _STOPPING.is_set():  # a pool worker told to stop: no new trial
+        raise KeyboardInterrupt
     start = time.perf_counter()
+    _IN_TRIAL.set()
     try:
         result = json_ready(dict(function(spec)))
     except Exception as error:  # a failing trial is data, not the end of the study
         result = {"error": error_line(error)}
+    finally:
+        _IN_TRIAL.clear()
     return result, time.perf_counter() - start
+
+
+_IN_TRIAL = threading.Event()
+_STOPPING = threading.Event()
+"""In a pool worker: whether a trial is running, and whether the study is stopping."""
+
+
+def _pool_worker_start() -> None:
+    """Initialise a local pool worker: a stop signal (the study's, forwarded, or Ctrl-C reaching the
+    whole process group) interrupts the trial it runs, once, so that its run closes its record, and
+    the worker takes no new trial."""
+    for number in STOP_SIGNALS:
+        signal.signal(number, _stop_worker)
+
+
+def _stop_worker(signum: int, frame: object) -> None:
+    if _STOPPING.is_set():  # already stopping: let the trial close its record
+        return
+    _STOPPING.set()
+    if _IN_TRIAL.is_set():
+        raise KeyboardInterrupt
 
 
 _THREAD_STATE = threading.local()
@@ -253,7 +280,7 @@ def thread_cached(build: Callable[..., T]) -> Callable[..., T]:
 # --- executors ------------------------------------------------------------------------------------
 
 
-@contextmanager
+@contextlib.contextmanager
 def _executor(workers: int, scheduler: str | None) -> Iterator[Executor]:
     """A Dask cluster's executor when ``scheduler`` is given, else a pool of ``workers`` processes."""
     if scheduler is not None:
@@ -265,11 +292,15 @@ def _executor(workers: int, scheduler: str | None) -> Iterator[Executor]:
             yield client.get_executor(pure=False)
         return
     # spawn: workers start clean (no forked threads or CasADi buffers), as they would on any OS
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+    context = multiprocessing.get_context("spawn")
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_pool_worker_start)
     try:
         yield pool
-    except BaseException:  # Ctrl-C or a failed write: do not wait for long trials to finish
+    except BaseException:  # Ctrl-C, a stop signal or a failed write: stop the trials under way
         pool.shutdown(wait=False, cancel_futures=True)
+        for worker in multiprocessing.active_children():
+            with contextlib.suppress(ProcessLookupError):  # it has just ended
+                os.kill(worker.pid, signal.SIGINT)
         raise
     pool.shutdown(wait=True)
 

@@ -101,3 +101,26 @@ def test_ctrl_c_while_drawing_leaves_no_figure_cut_short(tmp_path):
     assert not list(out.glob("*.gif")) and not list(out.glob("*.png"))
     assert status(out) == "completed"
     assert_loads(out)
+
+
+def test_sigterm_stops_a_pooled_study_and_the_runs_under_way(tmp_path):
+    """The study stops at once: the workers' runs close their records as interrupted."""
+    out = tmp_path / "study"
+    study = ["paper", "--trials", "2", "--workers", "2", "--no-progress", "--out", str(out)]
+    process = subprocess.Popen(
+        [sys.executable, "-m", "studies", *study],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    metas = [out / "trials" / str(k) / "meta.json" for k in (0, 1)]
+    wait_for(lambda: all(meta.is_file() for meta in metas), process)
+    time.sleep(0.3)
+    sent = time.monotonic()
+    process.send_signal(signal.SIGTERM)
+    code, _, err = finish(process)
+    assert code == 130 and time.monotonic() - sent < 10.0
+    assert err == [f"python -m studies paper: interrupted; finished trials are in {out / 'trials.jsonl'}"]
+    for meta in metas:
+        assert status(meta.parent) == "interrupted"
+        assert_loads(meta.parent)
