@@ -6,9 +6,17 @@
     ccopt bench qp_latency --quick
 
 Degrees and millimetres at the command line (vertices in mm), SI inside. Bad input gets one line
-naming the bad value and exit status 2, and leaves no run folder behind. Ctrl-C, SIGTERM and SIGHUP
-stop a run with its record closed (status ``interrupted``, exit status 130); a second one ends the
-program at once.
+naming the bad value and exit status 2, and leaves no run folder behind. A run needs friction at both
+contacts (``--mu-hand`` and ``--mu-ground`` positive); objects have faces of 1 cm to 1 m
+(:data:`ccopt.objects.MIN_EDGE`, :data:`~ccopt.objects.MAX_EDGE`) on which the hand fits.
+
+``ccopt run`` writes into a new or empty ``--out``; ``--overwrite`` first clears a previous run's
+files from it, and only those. Its exit status says how the run ended (:data:`EXIT_CODES`): 0
+completed, 3 ended early (``contact_lost``, ``sensor_fault``, ``timeout``, each with its one-line
+reason on stderr), 1 an error inside the run (its one-line message), 2 bad input, 130 interrupted.
+Ctrl-C, SIGTERM and SIGHUP stop a run with its record closed (status ``interrupted``, no figures);
+a second one ends the program at once and quietly. Interrupted while starting, a run leaves no
+folder; interrupted while drawing, no figure cut short.
 """
 
 from __future__ import annotations
@@ -88,7 +96,12 @@ def build_object(args: argparse.Namespace) -> PlanarObject:
 
 
 def _run_parser(commands: argparse._SubParsersAction) -> None:
-    run = commands.add_parser("run", help="manipulate an unknown object through a schedule")
+    run = commands.add_parser(
+        "run",
+        help="manipulate an unknown object through a schedule",
+        epilog="exit status: 0 completed, 3 ended early (contact_lost, sensor_fault, timeout), "
+        "1 error in the run, 2 bad input, 130 interrupted (Ctrl-C, SIGTERM, SIGHUP)",
+    )
     shape = run.add_mutually_exclusive_group()
     shape.add_argument("--object", default="paper-triangle", help="library object name")
     shape.add_argument("--vertices", help="convex polygon 'x,y;x,y;...' in mm, counter-clockwise")
@@ -180,7 +193,7 @@ def _command_run(args: argparse.Namespace, prog: str) -> int:
     if status != "completed":
         sys.stderr.write(f"{prog}: {status}: {message}\n")
     if not args.no_figures:
-        draw_figures(record.load_record(folder), folder)
+        draw_figures(record.load_record(folder), folder, prog)
     return EXIT_CODES[status]
 
 
@@ -192,10 +205,13 @@ def _discard(folder: Path, created: list[Path]) -> bool:
     return True
 
 
-def draw_figures(loaded: record.Record, folder: Path) -> None:
-    """Write the run's figures and GIF into ``folder`` and list them. All or none: if the drawing is
-    interrupted (or fails), the figures it had written are removed, so none is left cut short (a GIF
-    is written frame by frame); figures it had not reached yet are left as they were."""
+def draw_figures(loaded: record.Record, folder: Path, prog: str) -> bool:
+    """Write the run's figures and GIF into ``folder`` and list them; whether that worked.
+
+    All or none: if the drawing is interrupted or fails, the figures it had written are removed, so
+    none is left cut short (a GIF is written frame by frame), and a failure is one line on stderr;
+    figures it had not reached yet are left as they were. ``OSError`` if ``folder`` is not writable.
+    """
     from ccopt import plots
 
     before = _figure_files(folder)
@@ -203,12 +219,19 @@ def draw_figures(loaded: record.Record, folder: Path) -> None:
     try:
         paths = plots.write_figures(loaded, folder)
         drawn = True
+    except OSError:
+        raise
+    except Exception as error:  # data a figure cannot show must not hide how the run ended
+        reason = f"{type(error).__name__}: {error}".splitlines()[0]
+        sys.stderr.write(f"{prog}: cannot draw the figures of {str(folder)!r}: {reason}\n")
     finally:
         if not drawn:
             for path, identity in _figure_files(folder).items():
                 if before.get(path) != identity:
                     path.unlink(missing_ok=True)
-    print("figures: " + ", ".join(str(p) for p in paths))
+    if drawn:
+        print("figures: " + ", ".join(str(p) for p in paths))
+    return drawn
 
 
 def _figure_files(folder: Path) -> dict[Path, tuple[int, int, int]]:
@@ -295,10 +318,9 @@ def _command_plot(args: argparse.Namespace, prog: str) -> int:
     if not loaded.data:
         fail(prog, f"{args.record!r} holds no sample of its run (meta.json's run_id): nothing to draw")
     try:
-        draw_figures(loaded, Path(args.record))
+        return 0 if draw_figures(loaded, Path(args.record), prog) else 1
     except OSError as error:
         fail(prog, f"cannot write the figures into {args.record!r}: {error.strerror or error}")
-    return 0
 
 
 def _command_bench(args: argparse.Namespace, prog: str) -> int:

@@ -10,7 +10,7 @@ import sys
 import numpy as np
 import pytest
 
-from ccopt import cli, record
+from ccopt import cli, plots, record
 from studies import __main__ as studies_main
 
 QUICK = ["--schedule", "smoke", "--no-figures", "--no-progress"]
@@ -247,3 +247,26 @@ def test_plot_of_a_damaged_folder_is_one_line_exit_2(tmp_path, capsys, finished_
     damage(folder, how)
     one_line_exit_2(capsys, lambda: cli.main(["plot", str(folder)]), named)
     assert not list(folder.glob("*.png")) and not list(folder.glob("*.gif"))
+
+
+def test_a_figure_that_cannot_be_drawn_is_one_line_and_leaves_none(
+    tmp_path, capsys, monkeypatch, finished_folder
+):
+    def broken(loaded):
+        raise ValueError("Axis limits cannot be NaN or Inf")
+
+    monkeypatch.setitem(plots.FIGURES, "control.png", broken)
+    folder = tmp_path / "run"
+    shutil.copytree(finished_folder, folder)
+    assert cli.main(["plot", str(folder)]) == 1
+    why = "ValueError: Axis limits cannot be NaN or Inf"
+    line = f"ccopt plot: cannot draw the figures of {str(folder)!r}: {why}"
+    assert capsys.readouterr().err.splitlines() == [line]
+    assert not list(folder.glob("*.png")) and not list(folder.glob("*.gif"))
+    out = tmp_path / "again"
+    run = ["run", "--schedule", "smoke", "--no-progress", "--max-sim-s", "0.3", "--out", str(out)]
+    assert cli.main(run) == 3  # the run's own exit status
+    timeout, cannot = capsys.readouterr().err.splitlines()
+    assert timeout.startswith("ccopt run: timeout: ")
+    assert cannot.startswith("ccopt run: cannot draw the figures")
+    assert record.load_record(out).meta["status"] == "timeout"
