@@ -78,6 +78,7 @@ def study_modules() -> dict[str, str]:
         "paper": "studies.paper",
         "robustness": "studies.robustness",
         "perturbation": "studies.perturbation",
+        "faults": "studies.faults",
     }
 
 
@@ -508,10 +509,12 @@ def slips_cell(row: Mapping[str, object]) -> str:
     return f"{row['unintended_slips']} ({parts})"
 
 
-def closed_loop_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--schedule`` and ``--plant``, shared by the closed-loop studies."""
+def closed_loop_arguments(parser: argparse.ArgumentParser, schedule: str = "paper") -> None:
+    """``--schedule`` (default ``schedule``) and ``--plant``, shared by the closed-loop studies."""
     parser.add_argument(
-        "--schedule", default="paper", help="built-in (paper, smoke) or a .yaml/.json file (default: paper)"
+        "--schedule",
+        default=schedule,
+        help=f"built-in (paper, smoke) or a .yaml/.json file (default: {schedule})",
     )
     parser.add_argument(
         "--plant", choices=("planar", "panda"), default="planar", help="simulated robot (default: planar)"
