@@ -26,13 +26,18 @@ import runpy
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ccopt import __version__, objects, record, validation
 from ccopt.cliutil import INTERRUPTED, OneLineParser, fail, print_table, seed_value, stop_signals
 from ccopt.objects import PlanarObject
-from ccopt.schedule import load_schedule
+from ccopt.schedule import Schedule, load_schedule
+
+if TYPE_CHECKING:
+    from ccopt.closed_loop import LoopParams
+    from ccopt.plant.sensors import Fault
 
 BENCHMARKS = ("qp_latency", "plant_speed", "estimator_speed")
 
@@ -76,7 +81,7 @@ def check_numbers(args: argparse.Namespace) -> None:
             raise ValueError(f"{flag} must be in [{MIN_RATE:g}, {top:g}] Hz (the plant's rate), got {rate!r}")
 
 
-def fault_value(text: str):
+def fault_value(text: str) -> Fault:
     """argparse type: a sensor fault ``KIND[:VALUE][@START_S]`` (:func:`ccopt.plant.sensors.parse_fault`)."""
     from ccopt.plant.sensors import parse_fault
 
@@ -137,7 +142,7 @@ def _run_parser(commands: argparse._SubParsersAction) -> None:
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
-def run_inputs(args: argparse.Namespace):
+def run_inputs(args: argparse.Namespace) -> tuple[PlanarObject, Schedule, LoopParams]:
     """The object, schedule and loop parameters of ``ccopt run``, every argument checked (``ValueError``
     or ``TypeError`` naming it), the hand's start on the object included: nothing is created yet."""
     from ccopt.closed_loop import LoopParams, Supervision, start_config
@@ -181,10 +186,8 @@ def _command_run(args: argparse.Namespace, prog: str) -> int:
         else:
             sys.stderr.write(f"{prog}: interrupted; the record is in {folder}\n")
         return INTERRUPTED
-    except (ValueError, TypeError) as error:  # the plant or the controller refused the input
-        if not _discard(folder, created):
-            raise
-        fail(prog, str(error))
+    except Exception as error:  # the CLI's boundary: one line, never a traceback
+        return _run_failed(prog, folder, created, error)
     status, message = done.result.status, done.result.message
     print_summary(done.summary, folder)
     if status == "interrupted":
@@ -192,9 +195,30 @@ def _command_run(args: argparse.Namespace, prog: str) -> int:
         return INTERRUPTED
     if status != "completed":
         sys.stderr.write(f"{prog}: {status}: {message}\n")
-    if not args.no_figures:
-        draw_figures(record.load_record(folder), folder, prog)
+    loaded = record.load_record(folder)
+    if not args.no_figures and loaded.data:
+        draw_figures(loaded, folder, prog)
     return EXIT_CODES[status]
+
+
+def _run_failed(prog: str, folder: Path, created: list[Path], error: Exception) -> int:
+    """``ccopt run`` when the experiment raised instead of returning. Before the run began: input the
+    plant or the controller refused is bad input (one line, exit 2), anything else an error (one line,
+    exit 1), and nothing is left behind. After: one line with how the run ended, exit 1, the record
+    kept."""
+    reason = f"{type(error).__name__}: {error}".splitlines()[0]
+    if _discard(folder, created):
+        if isinstance(error, ValueError | TypeError):
+            fail(prog, str(error))
+        sys.stderr.write(f"{prog}: error: {reason}\n")
+        return EXIT_CODES["error"]
+    try:
+        meta = record.load_record(folder).meta
+        ended = f"the run ended {meta.get('status')!r} ({meta.get('message')}), then "
+    except ValueError:
+        ended = ""
+    sys.stderr.write(f"{prog}: error: {ended}{reason}; the record is in {folder}\n")
+    return EXIT_CODES["error"]
 
 
 def _discard(folder: Path, created: list[Path]) -> bool:
@@ -219,9 +243,7 @@ def draw_figures(loaded: record.Record, folder: Path, prog: str) -> bool:
     try:
         paths = plots.write_figures(loaded, folder)
         drawn = True
-    except OSError:
-        raise
-    except Exception as error:  # data a figure cannot show must not hide how the run ended
+    except Exception as error:  # data a figure cannot show, a full disk: not to hide how the run ended
         reason = f"{type(error).__name__}: {error}".splitlines()[0]
         sys.stderr.write(f"{prog}: cannot draw the figures of {str(folder)!r}: {reason}\n")
     finally:
@@ -317,10 +339,7 @@ def _command_plot(args: argparse.Namespace, prog: str) -> int:
         fail(prog, str(error))
     if not loaded.data:
         fail(prog, f"{args.record!r} holds no sample of its run (meta.json's run_id): nothing to draw")
-    try:
-        return 0 if draw_figures(loaded, Path(args.record), prog) else 1
-    except OSError as error:
-        fail(prog, f"cannot write the figures into {args.record!r}: {error.strerror or error}")
+    return 0 if draw_figures(loaded, Path(args.record), prog) else 1
 
 
 def _command_bench(args: argparse.Namespace, prog: str) -> int:

@@ -105,15 +105,22 @@ def remove_empty_folders(folders: list[Path]) -> None:
 
 
 def discard_unstarted(folder: str | Path) -> bool:
-    """Remove the files of a run that recorded no sample (it was stopped or failed while starting):
-    ``meta.json``, the empty chunks folder, a write probe. Returns whether nothing of the run is left
-    (also when the folder does not exist); a folder holding samples, or anything a run does not
-    write, is left as it is."""
+    """Remove the files of a run that never began (it was stopped or failed while starting): no
+    sample, and ``meta.json`` absent or still ``running``; its files are ``meta.json``, the empty
+    chunks folder, a write probe. Returns whether nothing of the run is left (also when the folder
+    does not exist); a folder holding samples, a run that ended, or anything a run does not write is
+    left as it is."""
     path = Path(folder)
     if not path.is_dir():
         return True
     if (path / "record.npz").exists() or _chunk_files(path):
         return False
+    if (path / "meta.json").exists():
+        try:
+            if _read_json_object(path / "meta.json").get("status") != "running":
+                return False
+        except ValueError:  # not a run's meta.json
+            return False
     try:
         entries = _previous_run_files(path, overwrite=True)
     except ValueError:  # something not written by a run: not ours to remove

@@ -239,20 +239,10 @@ def names(value: str) -> list[str]:
 def make_parser() -> argparse.ArgumentParser:
     parser = runner.study_parser("faults", __doc__.split("\n")[0])
     runner.closed_loop_arguments(parser, schedule="smoke")
-    parser.add_argument(
-        "--faults",
-        type=names,
-        default=list(FAULTS),
-        metavar="F,F,...",
-        help=f"faults KIND[:VALUE][@START_S] (default: {','.join(FAULTS)})",
-    )
-    parser.add_argument(
-        "--objects",
-        type=names,
-        default=list(OBJECTS),
-        metavar="NAME,...",
-        help=f"library objects (default: {','.join(OBJECTS)})",
-    )
+    lists = (("--faults", FAULTS, "faults KIND[:VALUE][@START_S]"), ("--objects", OBJECTS, "library objects"))
+    for flag, default, what in lists:
+        help_text = f"comma-separated {what} (default: {','.join(default)})"
+        parser.add_argument(flag, type=names, default=list(default), metavar="A,B,...", help=help_text)
     parser.add_argument(
         "--start", type=float, default=START, metavar="S", help=f"when faults start, s (default: {START:g})"
     )

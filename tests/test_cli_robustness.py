@@ -10,7 +10,8 @@ import sys
 import numpy as np
 import pytest
 
-from ccopt import cli, plots, record
+from ccopt import cli, closed_loop, plots, record
+from ccopt.estimation.estimator import Estimator
 from studies import __main__ as studies_main
 
 QUICK = ["--schedule", "smoke", "--no-figures", "--no-progress"]
@@ -200,6 +201,40 @@ def test_an_exception_in_the_run_is_one_line_and_exit_1(tmp_path):
     assert lines == ["ccopt run: error: FloatingPointError: the solver returned NaN"]
     meta = json.loads((out / "meta.json").read_text())
     assert meta["status"] == "error" and meta["message"] == "FloatingPointError: the solver returned NaN"
+
+
+def test_an_exception_before_the_first_sample_keeps_the_record(tmp_path, capsys, monkeypatch):
+    """The loop closes its record as ``error``; scoring an empty record then fails too: one line."""
+
+    def broken(self, *args, **kwargs):
+        raise FloatingPointError("the estimator overflowed")
+
+    monkeypatch.setattr(Estimator, "update", broken)
+    out = tmp_path / "run"
+    assert cli.main(["run", *QUICK, "--out", str(out)]) == 1
+    err = [line for line in capsys.readouterr().err.splitlines() if not line.startswith("warning:")]
+    assert len(err) == 1 and err[0].endswith(f"; the record is in {out}")
+    assert err[0].startswith("ccopt run: error: the run ended 'error' (FloatingPointError: the estimator")
+    assert record.load_record(out).meta["status"] == "error"
+
+
+@pytest.mark.parametrize(
+    ("error", "code"), [(ValueError("target pose must be finite"), 2), (RuntimeError("no C compiler"), 1)]
+)
+def test_a_run_that_cannot_start_leaves_no_folder(tmp_path, capsys, monkeypatch, error, code):
+    def refuse(obj, params):
+        raise error
+
+    monkeypatch.setattr(closed_loop, "make_plant", refuse)
+    out = tmp_path / "new" / "run"
+    try:
+        status = cli.main(["run", *QUICK, "--out", str(out)])
+    except SystemExit as ended:  # bad input
+        status = ended.code
+    assert status == code
+    err = [line for line in capsys.readouterr().err.splitlines() if not line.startswith("warning:")]
+    assert len(err) == 1 and str(error) in err[0]
+    assert not (tmp_path / "new").exists()
 
 
 # --- plot -----------------------------------------------------------------------------------------
