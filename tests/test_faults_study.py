@@ -10,7 +10,7 @@ from ccopt import record
 from ccopt.hand import Hand
 from studies import faults
 
-FAULTS = "dead-ft,scale-ft:3,spikes-ft:20"
+FAULTS = "none,dead-ft,scale-ft:3"
 QUICK = ["--quick", "--faults", FAULTS, "--start", "0.8", "--workers", "1", "--no-progress"]
 
 
@@ -25,8 +25,8 @@ def test_each_fault_is_one_recorded_trial(study):
     code, out, results = study
     assert code == 0 and (out / "results.csv").is_file()
     trials = results["trials"]
-    assert [t["spec"]["fault"] for t in trials] == ["dead-ft@0.8", "scale-ft:3.0@0.8", "spikes-ft:20.0@0.8"]
-    assert {t["spec"]["object"] for t in trials} == {faults.OBJECTS[0]}
+    assert [t["spec"]["fault"] for t in trials] == ["none", "dead-ft", "scale-ft:3.0"]
+    assert {(t["spec"]["object"], t["spec"]["start"]) for t in trials} == {(faults.OBJECTS[0], 0.8)}
     for trial in trials:
         folder = out / "trials" / str(trial["spec"]["index"])
         assert trial["spec"]["folder"] == str(folder)
@@ -46,9 +46,12 @@ def test_the_figures_are_those_of_the_record(study):
         assert row["peak_force_n"] == pytest.approx(normal[time >= 0.8].max())
         assert row["loads"] and row["plots"]
         assert row["force_ok"] == (row["over_limit_s"] <= 0.05) and row["peak_force_n"] < 1.2 * limit
-    by_fault = {t["spec"]["fault"].split("@")[0]: t["result"] for t in results["trials"]}
+    by_fault = {t["spec"]["fault"]: t["result"] for t in results["trials"]}
+    assert by_fault["none"]["status"] == "completed"
     assert by_fault["dead-ft"]["status"] == "sensor_fault" and by_fault["dead-ft"]["ended_after_s"] < 0.2
     assert by_fault["scale-ft:3.0"]["status"] == "sensor_fault"
+    dead = record.load_record(results["trials"][1]["spec"]["folder"])
+    assert np.all(dead["hand_wrench"][dead["time"] >= 0.8] == 0.0)  # the fault acted from t_f
     assert results["summary"]["passed"] == {"force_ok": 3, "ended_in_time": 3, "loads": 3, "plots": 3}
 
 
@@ -77,6 +80,8 @@ def test_longest_run(flags, longest):
         (["--faults", "dropout:2"], "dropout probability must be in [0, 1]"),
         (["--faults", "dead-ft,"], "comma-separated"),
         (["--start", "nan"], "finite"),
+        (["--start", "-1"], "at least 0 s"),
+        (["--faults", "dead-ft@2"], "--faults 'dead-ft@2': give the faults' start with --start"),
         (["--objects", "blob"], "unknown object 'blob'"),
         (["--seed", "-2"], "'-2'"),
     ],
