@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ccopt import geometry, statics
+from ccopt.modes import Motion
 from ccopt.objects import PlanarObject
 from ccopt.planning.graph import ConfigurationGraph, Edge, GraphParams, Node
 from ccopt.plant import placement
@@ -170,7 +171,8 @@ def plan_tour(
     obj: PlanarObject,
     params: LoopParams,
     angle_range: tuple[float, float],
-    margin: float = 1.0,
+    margin: float = 2.5,
+    force_share: float = 0.75,
     candidates: int = 7,
     **tour_options: object,
 ) -> tuple[LoopParams, Tour]:
@@ -178,7 +180,10 @@ def plan_tour(
     face (``candidates`` of them, at the run's start tilt), the one whose :func:`possible_tour` holds
     the most slides (up to the number asked for of each kind), with the loop parameters that start
     there. ``angle_range`` is the robot's reach in ``θ_h`` (rad); the object's own vertex range and
-    ``5°`` of clearance narrow it. Uses the true object: never for the estimator or the controller."""
+    ``5°`` of clearance narrow it. Every step (and the start) keeps ``margin`` (N) with a normal force
+    within ``force_share`` of the hand's range and the estimate's torque lever: headroom for what the
+    statics ignore (the contacts' compliance, the dynamics). Uses the true object: never for the
+    estimator or the controller."""
     base = dataclasses.replace(params.start, s_h=0.0)
     low, high = placement.face_s_h_range(obj, base)
     inset = params.hand.half_length + 2e-3
@@ -188,17 +193,23 @@ def plan_tour(
     clearance = math.radians(5.0)
     theta_range = (max(angle_range[0], tilt_low + clearance), min(angle_range[1], tilt_high - clearance))
     wanted = int(tour_options.get("slides", 4))
+    lever = params.estimator_params.friction.torque_margin * params.hand.half_length  # as the run knows it
+    f_min, f_max = params.hand.force_limits
+    forces = (f_min, f_min + force_share * (f_max - f_min))  # headroom for what the model ignores
     best: tuple[int, LoopParams, Tour] | None = None
     for s_h in np.linspace(low + inset, high - inset, candidates):
         start = dataclasses.replace(base, s_h=float(s_h))
         trial = dataclasses.replace(params, start=start, centre_hand=False)
         truth = statics.true_statics(obj, start, params.hand)
         graph_params = GraphParams(s_h_range=truth.s_h_range, theta_range=theta_range, min_margin=margin)
-        hand = params.hand
         where = (truth.theta_o, truth.s_h)
-        graph = ConfigurationGraph(truth.statics, where, hand.half_length, hand.force_limits, graph_params)
+        graph = ConfigurationGraph(truth.statics, where, lever, forces, graph_params)
+        if graph.margin(Node(0, 0), Motion.HOLD) < margin:
+            continue  # the run could not even hold its start comfortably
         tour = possible_tour(graph, **tour_options)
         score = sum(min(tour.counts[kind], wanted) for kind in SLIDE_KINDS)
         if best is None or score > best[0]:
             best = (score, trial, tour)
+    if best is None:
+        raise ValueError(f"{obj.name} cannot be held with a margin of {margin} N anywhere on its face")
     return best[1], best[2]
