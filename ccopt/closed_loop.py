@@ -126,6 +126,7 @@ class StepResult:
     end_time: float
     status: str
     reason: str = ""
+    explore: bool = False
 
     @property
     def reached(self) -> bool:
@@ -262,9 +263,9 @@ class _StepTracker:
         self, now: float, estimate: Estimate, hand_pose: np.ndarray, status: str, reason: str = ""
     ) -> None:
         if self.index >= 0:
-            self.results.append(
-                StepResult(self.index, self.step.kind, self.step.delta, self.start_time, now, status, reason)
-            )
+            step = self.step
+            result = (self.index, step.kind, step.delta, self.start_time, now, status, reason, step.explore)
+            self.results.append(StepResult(*result))
         self.index += 1
         if self.done:
             return

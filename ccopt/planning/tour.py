@@ -24,7 +24,7 @@ from ccopt.objects import PlanarObject
 from ccopt.planning.graph import ConfigurationGraph, Edge, GraphParams, Node
 from ccopt.plant import placement
 from ccopt.plant.base import StartConfig
-from ccopt.schedule import Schedule, Step, hold
+from ccopt.schedule import Schedule, Step, exploration, hold
 
 if TYPE_CHECKING:
     from ccopt.closed_loop import LoopParams
@@ -90,11 +90,6 @@ def possible_tour(
     reach = reachable_nodes(graph, node)
     allowed = allowed_slides(graph, reach)
     edges: list[Edge] = []
-    for sign in (1, -1, -1, 1):  # exploration: the kinematics need the object turned both ways
-        pivot = next((e for e in graph.edges(node) if e.kind == "pivot" and e.delta * sign > 0), None)
-        if pivot is not None:
-            edges.append(pivot)
-            node = pivot.target
     done = {kind: 0 for kind in SLIDE_KINDS}
     way = {kind: 1 for kind in SLIDE_KINDS}
     s_g = 0.0
@@ -128,9 +123,19 @@ def possible_tour(
                 node = pivot.target
                 progressed = True
         stuck = 0 if progressed else stuck + 1
-    schedule = Schedule(name, (hold(0.5), *(_as_step(edge, timeout) for edge in edges), hold(0.5)))
+    explore = exploration() if _explorable(graph) else ()
+    steps = (hold(0.5), *explore, *(_as_step(edge, timeout) for edge in edges), hold(0.5))
+    schedule = Schedule(name, steps)
     counts = {kind: sum(edge.kind == kind for edge in edges) for kind in ("pivot", *SLIDE_KINDS)}
     return Tour(schedule, allowed, counts)
+
+
+def _explorable(graph: ConfigurationGraph) -> bool:
+    """Whether the exploration's pivots (:func:`ccopt.schedule.exploration`) are possible from the
+    start: one pivot each way."""
+    start = Node(0, 0)
+    ways = {int(math.copysign(1, e.delta)) for e in graph.edges(start) if e.kind == "pivot"}
+    return ways == {1, -1}
 
 
 def _route_to_slide(graph: ConfigurationGraph, source: Node, kind: str, sign: int) -> list[Edge] | None:
