@@ -70,45 +70,82 @@ class GravityParams:
         check_number("valid_std", self.valid_std)
 
 
-@dataclass(frozen=True)
 class GravityEstimate:
     """``M(θ) = a cos θ + b sin θ``, the weight's moment about the ground contact (N·m, CCW).
+
+    Immutable. The least squares are solved when the estimate is first read (about 2 µs), not at
+    every sample: a sample only copies the sums.
 
     Attributes:
         a, b: the cos and sin coefficients (N·m; :class:`ccopt.statics.GravityMoment`); NaN while
             the ground contact is unknown.
         covariance: ``(var a, cov(a, b), var b)`` (N²·m²).
-        valid: whether ``M̂`` at the current ``θ_o`` is known within ``valid_std`` and the kinematics
-            are valid.
+        valid: whether ``M̂`` at the ``θ_o`` of its sample is known within ``valid_std`` and the
+            kinematics are valid.
     """
 
-    a: float = math.nan
-    b: float = math.nan
-    covariance: tuple[float, float, float] = (math.nan,) * 3
-    valid: bool = False
+    __slots__ = ("_problem", "_solution")
+
+    def __init__(self, problem: _Problem | None = None) -> None:
+        self._problem = problem
+        self._solution: _Solution | None = None if problem is not None else _UNKNOWN_SOLUTION
+
+    @property
+    def a(self) -> float:
+        return self._solved()[0]
+
+    @property
+    def b(self) -> float:
+        return self._solved()[1]
+
+    @property
+    def covariance(self) -> tuple[float, float, float]:
+        return self._solved()[2]
+
+    @property
+    def valid(self) -> bool:
+        return self._solved()[3]
 
     def moment(self, theta: float) -> float:
         """``M̂(θ)`` (N·m) at face angle ``θ`` (rad)."""
-        return self.a * math.cos(theta) + self.b * math.sin(theta)
+        a, b, _, _ = self._solved()
+        return a * math.cos(theta) + b * math.sin(theta)
 
     def moment_std(self, theta: float) -> float:
         """The standard deviation of ``M̂(θ)`` (N·m) at face angle ``θ`` (rad)."""
-        return math.sqrt(_quadratic(self.covariance, math.cos(theta), math.sin(theta)))
+        return math.sqrt(_quadratic(self._solved()[2], math.cos(theta), math.sin(theta)))
+
+    def __repr__(self) -> str:
+        a, b, covariance, valid = self._solved()
+        return f"GravityEstimate(a={a!r}, b={b!r}, covariance={covariance!r}, valid={valid!r})"
+
+    def _solved(self) -> _Solution:
+        if self._solution is None:
+            self._solution = _solve_problem(*self._problem)
+        return self._solution
 
 
+_Solution = tuple[float, float, tuple[float, float, float], bool]
+"""``(a, b, covariance, valid)``."""
+_UNKNOWN_SOLUTION: _Solution = (math.nan, math.nan, (math.nan,) * 3, False)
 UNKNOWN = GravityEstimate()
 """The estimate before any usable sample."""
+
+
+_Problem = tuple[tuple[float, ...], tuple[float, ...], _GroundContact, float, bool, "GravityParams"]
+"""One estimate's least squares: the sums and prior (:class:`GravityEstimator`), the ground contact,
+the sample's ``θ_o``, whether the kinematics are valid, and the parameters (a plain tuple: one is
+made per sample)."""
 
 
 class GravityEstimator:
     """Least squares of ``(a, b)`` with the ground contact applied last (see the module docstring).
 
-    Plain floats: a sample costs a few microseconds.
+    Plain floats: a sample costs about a microsecond.
     """
 
     def __init__(self, params: GravityParams | None = None) -> None:
         self.params = params if params is not None else GravityParams()
-        self._weight = 1.0 / self.params.moment_noise**2
         self._epoch = (0, 0)  # the kinematics' (resets, anchor) of the current segment
         self._contact: _GroundContact = (0.0,) * 5  # its last ground contact estimate
         self.reset()
@@ -146,7 +183,7 @@ class GravityEstimator:
         """The ground contact moves (a ground slide): fold this segment, with ``contact`` the last
         estimate of its ground contact, into the prior."""
         if self._samples:
-            (a, b), (paa, pab, pbb) = self._solve(contact)
+            (a, b), (paa, pab, pbb) = _solve(tuple(self._sums), self._prior, contact, self.params)
             det = paa * pbb - pab * pab
             laa, lab, lbb = pbb / det, -pab / det, paa / det
             self._prior = (laa, lab, lbb, laa * a + lab * b, lab * a + lbb * b)
@@ -161,8 +198,18 @@ class GravityEstimator:
         f_x, f_y = f_n * sin_h + f_t * cos_h, -f_n * cos_h + f_t * sin_h  # f_n e_n + f_t e_t
         moment = -torque - (x_h * f_y - y_h * f_x)
         c, s = math.cos(theta_o), math.sin(theta_o)
-        values = (c * c, c * s, s * s, c * moment, s * moment, c * f_x, s * f_x, c * f_y, s * f_y, c, s)
-        self._sums = [total + value for total, value in zip(self._sums, values, strict=True)]
+        sums = self._sums
+        sums[0] += c * c
+        sums[1] += c * s
+        sums[2] += s * s
+        sums[3] += c * moment
+        sums[4] += s * moment
+        sums[5] += c * f_x
+        sums[6] += s * f_x
+        sums[7] += c * f_y
+        sums[8] += s * f_y
+        sums[9] += c
+        sums[10] += s
         self._samples += 1
         self._informed = True
 
@@ -172,38 +219,58 @@ class GravityEstimator:
         """The estimate with ``contact`` the current ground contact estimate (None: unknown)."""
         if contact is None or not self._informed:
             return UNKNOWN
-        (a, b), covariance = self._solve(contact)
-        valid = kinematics_valid and math.isfinite(theta_o)
-        if valid:
-            std = math.sqrt(_quadratic(covariance, math.cos(theta_o), math.sin(theta_o)))
-            valid = std <= self.params.valid_std
-        return GravityEstimate(a, b, covariance, valid)
+        return GravityEstimate(
+            (tuple(self._sums), self._prior, contact, theta_o, kinematics_valid, self.params)
+        )
 
     def _clear_segment(self) -> None:
         self._sums = [0.0] * 11  # Σ φφᵀ (3), Σ φ m (2), Σ φ f_x (2), Σ φ f_y (2), Σ φ (2)
         self._samples = 0
 
-    def _solve(self, contact: _GroundContact) -> tuple[tuple[float, float], tuple[float, float, float]]:
-        """``((a, b), (var a, cov, var b))`` with the ground contact ``(x_o, y_o, Σ_ro)``."""
-        x_o, y_o, vxx, vxy, vyy = contact
-        w = self._weight
-        aa, ab, bb, mc, ms, xc, xs, yc, ys, kc, ks = self._sums
-        laa, lab, lbb, ea, eb = self._prior
-        laa, lab, lbb = laa + w * aa, lab + w * ab, lbb + w * bb
-        det = laa * lbb - lab * lab
-        saa, sab, sbb = lbb / det, -lab / det, laa / det  # S = Λ⁻¹
-        ra = ea + w * (mc + x_o * yc - y_o * xc)
-        rb = eb + w * (ms + x_o * ys - y_o * xs)
-        a, b = saa * ra + sab * rb, sab * ra + sbb * rb
-        # sensitivities of (a, b) to x_o, y_o and to a common moment bias: S G w, S k w
-        gxa, gxb = w * (saa * yc + sab * ys), w * (sab * yc + sbb * ys)
-        gya, gyb = -w * (saa * xc + sab * xs), -w * (sab * xc + sbb * xs)
-        ka, kb = w * (saa * kc + sab * ks), w * (sab * kc + sbb * ks)
-        bias = self.params.moment_bias**2
-        paa = saa + gxa * gxa * vxx + 2.0 * gxa * gya * vxy + gya * gya * vyy + bias * ka * ka
-        pbb = sbb + gxb * gxb * vxx + 2.0 * gxb * gyb * vxy + gyb * gyb * vyy + bias * kb * kb
-        pab = sab + gxa * gxb * vxx + (gxa * gyb + gya * gxb) * vxy + gya * gyb * vyy + bias * ka * kb
-        return (a, b), (paa, pab, pbb)
+
+def _solve_problem(
+    sums: tuple[float, ...],
+    prior: tuple[float, ...],
+    contact: _GroundContact,
+    theta_o: float,
+    kinematics_valid: bool,
+    params: GravityParams,
+) -> _Solution:
+    """``(a, b, covariance, valid)`` of one :data:`_Problem`."""
+    (a, b), covariance = _solve(sums, prior, contact, params)
+    valid = kinematics_valid and math.isfinite(theta_o)
+    if valid:
+        valid = _quadratic(covariance, math.cos(theta_o), math.sin(theta_o)) <= params.valid_std**2
+    return a, b, covariance, valid
+
+
+def _solve(
+    sums: tuple[float, ...],
+    prior: tuple[float, ...],
+    contact: _GroundContact,
+    params: GravityParams,
+) -> tuple[tuple[float, float], tuple[float, float, float]]:
+    """``((a, b), (var a, cov, var b))`` of the sums and prior with the ground contact
+    ``(x_o, y_o, Σ_ro)``."""
+    x_o, y_o, vxx, vxy, vyy = contact
+    w = 1.0 / params.moment_noise**2
+    aa, ab, bb, mc, ms, xc, xs, yc, ys, kc, ks = sums
+    laa, lab, lbb, ea, eb = prior
+    laa, lab, lbb = laa + w * aa, lab + w * ab, lbb + w * bb
+    det = laa * lbb - lab * lab
+    saa, sab, sbb = lbb / det, -lab / det, laa / det  # S = Λ⁻¹
+    ra = ea + w * (mc + x_o * yc - y_o * xc)
+    rb = eb + w * (ms + x_o * ys - y_o * xs)
+    a, b = saa * ra + sab * rb, sab * ra + sbb * rb
+    # sensitivities of (a, b) to x_o, y_o and to a common moment bias: S G w, S k w
+    gxa, gxb = w * (saa * yc + sab * ys), w * (sab * yc + sbb * ys)
+    gya, gyb = -w * (saa * xc + sab * xs), -w * (sab * xc + sbb * xs)
+    ka, kb = w * (saa * kc + sab * ks), w * (sab * kc + sbb * ks)
+    bias = params.moment_bias**2
+    paa = saa + gxa * gxa * vxx + 2.0 * gxa * gya * vxy + gya * gya * vyy + bias * ka * ka
+    pbb = sbb + gxb * gxb * vxx + 2.0 * gxb * gyb * vxy + gyb * gyb * vyy + bias * kb * kb
+    pab = sab + gxa * gxb * vxx + (gxa * gyb + gya * gxb) * vxy + gya * gyb * vyy + bias * ka * kb
+    return (a, b), (paa, pab, pbb)
 
 
 def _quadratic(covariance: tuple[float, float, float], c: float, s: float) -> float:

@@ -416,7 +416,12 @@ class KinematicEstimator:
         """``(P hᵀ, innovation, innovation variance)`` of one measurement ``row · x = value``."""
         h0, h1, h2, h3, h4 = row
         state = self._state
-        c0, c1, c2, c3, c4 = (r[0] * h0 + r[1] * h1 + r[2] * h2 + r[3] * h3 + r[4] * h4 for r in self._cov)
+        r0, r1, r2, r3, r4 = self._cov  # P hᵀ, unrolled (a generator costs more than the sums)
+        c0 = r0[0] * h0 + r0[1] * h1 + r0[2] * h2 + r0[3] * h3 + r0[4] * h4
+        c1 = r1[0] * h0 + r1[1] * h1 + r1[2] * h2 + r1[3] * h3 + r1[4] * h4
+        c2 = r2[0] * h0 + r2[1] * h1 + r2[2] * h2 + r2[3] * h3 + r2[4] * h4
+        c3 = r3[0] * h0 + r3[1] * h1 + r3[2] * h2 + r3[3] * h3 + r3[4] * h4
+        c4 = r4[0] * h0 + r4[1] * h1 + r4[2] * h2 + r4[3] * h3 + r4[4] * h4
         variance = c0 * h0 + c1 * h1 + c2 * h2 + c3 * h3 + c4 * h4 + self._noise_variance
         innovation = value - (state[0] * h0 + state[1] * h1 + state[2] * h2 + state[3] * h3 + state[4] * h4)
         return (c0, c1, c2, c3, c4), innovation, variance
@@ -448,32 +453,48 @@ class KinematicEstimator:
         return self._state[X_O], self._state[Y_O], cov[X_O][X_O], cov[X_O][Y_O], cov[Y_O][Y_O]
 
     def _hand_frame_s_h(self, torque: float) -> tuple[float, float]:
-        """``s_h`` in the hand frame, ``s cos δ − d sin δ`` with ``δ = ĉ τ``, and its variance."""
+        """``s_h`` in the hand frame, ``s cos δ − d sin δ`` with ``δ = ĉ τ``, and its variance
+        (first order in ``(s, d, c)``)."""
         state, cov = self._state, self._cov
+        s, d = state[S_H], state[D]
         tilt = state[C] * torque
         cos, sin = math.cos(tilt), math.sin(tilt)
-        jacobian = ((S_H, cos), (D, -sin), (C, -torque * (state[S_H] * sin + state[D] * cos)))
-        variance = sum(a * b * cov[i][j] for i, a in jacobian for j, b in jacobian)
-        return state[S_H] * cos - state[D] * sin, variance
+        j_s, j_d, j_c = cos, -sin, -torque * (s * sin + d * cos)
+        row_s, row_d, row_c = cov[S_H], cov[D], cov[C]
+        variance = (
+            j_s * (j_s * row_s[S_H] + j_d * row_s[D] + j_c * row_s[C])
+            + j_d * (j_s * row_d[S_H] + j_d * row_d[D] + j_c * row_d[C])
+            + j_c * (j_s * row_c[S_H] + j_d * row_c[D] + j_c * row_c[C])
+        )
+        return s * cos - d * sin, variance
 
     def _estimate(self, s_h_defined: bool, torque: float, fixed: bool) -> KinematicEstimate:
         state, cov, params = self._state, self._cov, self.params
         s_h, s_h_variance = self._hand_frame_s_h(torque)
-        std = (*(math.sqrt(max(cov[i][i], 0.0)) for i in _CONTACT), math.sqrt(max(s_h_variance, 0.0)))
-        means = (state[D], state[X_O], state[Y_O], s_h if s_h_defined else math.nan)
-        rough = tuple(
-            mean if deviation <= params.rough_std else math.nan
-            for mean, deviation in zip(means, std, strict=True)
+        sqrt, nan, rough_std = math.sqrt, math.nan, params.rough_std
+        std = (
+            sqrt(max(cov[D][D], 0.0)),
+            sqrt(max(cov[X_O][X_O], 0.0)),
+            sqrt(max(cov[Y_O][Y_O], 0.0)),
+            sqrt(max(s_h_variance, 0.0)),
         )
-        contact_valid = max(std[:3]) <= params.valid_std
-        s_h_valid = s_h_defined and contact_valid and std[S_H] <= params.valid_std
-        nan = math.nan
+        d, x_o, y_o = state[D], state[X_O], state[Y_O]
+        if not s_h_defined:
+            s_h = nan
+        rough = (
+            d if std[0] <= rough_std else nan,
+            x_o if std[1] <= rough_std else nan,
+            y_o if std[2] <= rough_std else nan,
+            s_h if std[3] <= rough_std else nan,
+        )
+        contact_valid = max(std[0], std[1], std[2]) <= params.valid_std
+        s_h_valid = s_h_defined and contact_valid and std[3] <= params.valid_std
         return KinematicEstimate(
             theta_o=self._theta_o,
             s_h=s_h if s_h_valid else nan,
-            s_g=state[X_O] if contact_valid else nan,
-            d=state[D] if contact_valid else nan,
-            r_o=np.array(state[X_O : Y_O + 1] if contact_valid else (nan, nan)),
+            s_g=x_o if contact_valid else nan,
+            d=d if contact_valid else nan,
+            r_o=np.array((x_o, y_o) if contact_valid else (nan, nan)),
             std=std,
             theta_o_valid=self._theta_o_valid,
             s_h_valid=s_h_valid,
@@ -481,7 +502,7 @@ class KinematicEstimator:
             rough=rough,
             theta_std=self._theta_std if self._theta_o_valid else nan,
             compliance=state[C],
-            compliance_std=math.sqrt(max(cov[C][C], 0.0)),
+            compliance_std=sqrt(max(cov[C][C], 0.0)),
             resets=self.resets,
             anchor=self.anchor,
             ground_fixed=fixed,
