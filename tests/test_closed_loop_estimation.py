@@ -37,7 +37,7 @@ SCHEDULE = Schedule(
         hold(0.3),
     ),
 )
-FIRST_VALID_LIMIT = math.radians(25.0)  # of cumulative pivoting (the hand's range is the limit: see README)
+FIRST_VALID_LIMIT = math.radians(25.0)  # of cumulative pivoting (c, d, y_o confounded: .kinematics)
 THETA_LIMIT = math.radians(0.3)
 POSITION_LIMIT = 2e-3
 MOMENT_LIMIT = 0.02  # N·m

@@ -19,8 +19,13 @@ projected on the estimated object frame ``ê = e(θ_h − ĉ τ)``, and their li
 (``∂e_n/∂θ = e_t``, ``∂e_t/∂θ = −e_n``) adds the columns ``−s_h τ`` to eq. 15 and ``d τ`` to eq. 16.
 ``c`` is observable because ``τ`` does not follow ``θ_o`` alone (holds and the controller's wrench
 changes turn the hand without turning the object); while it is poorly known its uncertainty enters
-every prediction, so the gates and the standard deviations stay honest. ``c`` survives a reset
-(it belongs to the contact, not to the configuration); only its correlations are forgotten.
+every prediction, so the gates and the standard deviations stay honest. Where ``τ`` does follow
+``θ_o`` (``τ ≈ α + β θ_o``, as gravity's moment makes it in a pivot), eq. 16 sees ``y_o + d c β``
+and eq. 15 ``d + y_o``: ``c``, ``d`` and ``y_o`` are then confounded to first order, and in closed
+loop the kinematics become valid only once pivots have visited about 14° of ``θ_o`` (with ``c``
+known, half that). A wrench that varies at a fixed angle (e.g. the normal force, which moves ``τ``
+by ``s_h Δf_n``) pins ``c`` down. ``c`` survives a reset (it belongs to the contact, not to the
+configuration); only its correlations are forgotten.
 
 Both projections are linear in the positions, so one recursive least-squares (Kalman) estimate
 with covariance ``P`` covers every case of the paper. What the contact modes allow to change is
@@ -65,7 +70,10 @@ not act on, see :func:`ccopt.estimation.estimator.kinematic_modes`), an unexplai
 ground's. The classifier is conservative (sliding is almost never reported sticking), so a
 sticking-hand report is the reliable one. The rigid update costs little when the ground did not
 move (``r_o`` is re-anchored to within the pose noise); the slip it catches would otherwise be read
-as a hand slide, leaving ``s_h`` and ``s_g`` wrong by the slip.
+as a hand slide, leaving ``s_h`` and ``s_g`` wrong by the slip. A hand the controller keeps sticking
+but the classifier reports sliding (``hand_may_slide``: the modes given are the command's, see
+:func:`ccopt.estimation.estimator.commanded_modes`) is regressed as sticking with the tighter
+``hand_slip_gate`` on eq. 16, which catches a creeping slide sooner.
 """
 
 from __future__ import annotations
