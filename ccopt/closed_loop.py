@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from ccopt import geometry, validation
+from ccopt import geometry, modes, validation
 from ccopt.contact import GROUND_ROWS
 from ccopt.control.controller import Command, ControlInput, Controller, ControllerParams
 from ccopt.control.targets import UNJUDGED, StaticsTarget, statics_target
@@ -450,7 +450,8 @@ class _Loop:
     def _sense(self) -> None:
         reading = self.sensors.read()
         time, pose, wrench = reading.time, reading.hand_pose, reading.hand_wrench
-        self.estimate = self.estimator.update(time, pose, wrench)
+        commanded = modes.configuration(self.tracker.command.motion) if self.tracker.command else None
+        self.estimate = self.estimator.update(time, pose, wrench, commanded)
         self.hand_pose = pose if bool(np.all(np.isfinite(pose))) else None
         sample = _sample(self.plant, reading, self.estimate, self.target, self.tracker, *self.last_solution)
         if self.writer is not None:
