@@ -82,6 +82,32 @@ def test_the_contact_compliance_is_estimated_and_removed_from_the_kinematics(see
     assert abs(rotate_with_torque(rigid, np.random.default_rng(seed))[0].d - D) > 3e-3  # what it fixes
 
 
+NORMAL_COMPLIANCE = 1e-4  # m/N: the face sinks towards the ground contact by k f_n
+
+
+def rotate_with_varying_force(estimator: KinematicEstimator, rng: np.random.Generator):
+    """Rotate the object about the ground contact by ±15° while the normal force varies between 5
+    and 25 N, the hand sunk by ``NORMAL_COMPLIANCE · f_n`` along its normal (a rigid contact in
+    rotation). Returns the last estimate."""
+    count = 1200
+    angles = np.radians(15.0) * np.sin(np.linspace(0.0, 2.0 * np.pi, count))
+    forces = 15.0 + 10.0 * np.sin(2.0 * np.pi * np.arange(count) / 97.0)
+    for theta, force in zip(angles, forces, strict=True):
+        sunk = D - NORMAL_COMPLIANCE * force
+        pose = geometry.hand_pose_from_contact(theta, S_H, sunk, R_O)
+        estimate = step(estimator, measured(pose, rng), normal_force=force + rng.normal(0.0, 0.1))
+    return estimate
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_the_normal_compliance_is_estimated_and_d_is_reported_at_the_reference_force(seed):
+    params = KinematicsParams(compliance_std=0.0)
+    estimate = rotate_with_varying_force(KinematicEstimator(L_H, params), np.random.default_rng(seed))
+    assert abs(estimate.normal_compliance - NORMAL_COMPLIANCE) < 1.5e-5
+    assert abs(estimate.d - (D - NORMAL_COMPLIANCE * params.reference_force)) < 5e-4
+    assert np.all(np.abs(estimate.r_o - R_O) < 5e-4) and abs(estimate.s_h - S_H) < 5e-4
+
+
 def test_the_regression_sample_is_not_selected_by_its_own_angle_noise():
     """A rigid contact (c = 0) turning to and fro with the torque following the direction of
     turning. The sample whose measured angle crosses the excitation threshold has its noise biased

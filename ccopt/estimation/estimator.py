@@ -270,6 +270,7 @@ class Estimator:
             ground_may_slide,
             torque=values[6],
             hand_may_slide=hand_may_slide,
+            normal_force=f_n,
         )
         theta_o = kinematics.theta_o
         if in_contact and kinematics.theta_o_valid and likely.hand_geometry == HandGeometry.FLUSH:

@@ -27,6 +27,15 @@ known, half that). A wrench that varies at a fixed angle (e.g. the normal force,
 by ``s_h Δf_n``) pins ``c`` down. ``c`` survives a reset (it belongs to the contact, not to the
 configuration); only its correlations are forgotten.
 
+**Normal compliance.** Both contacts also give along the normal: the hand face sinks towards the
+ground contact by ``k f_n`` (the penetrations of the hand and ground contacts; 0.06 mm/N on the
+default plants). At a constant force that is part of ``d``; but the controller changes ``f_n`` with
+the motion's statics (10 → 19 N within one pivot), and the unmodelled 0.5 mm, confounded with ``c``
+and ``y_o`` as above, biased ``s_h`` and ``s_g`` by 2–3 mm on a closed-loop recording of the paper
+triangle. ``k`` is a sixth state (prior ``normal_compliance_std``, kept on a reset like ``c``):
+eq. 15 reads ``r_h·ê_n = −d + k (f_n − f_ref) + r_o·ê_n``, linear in ``k``, so ``d`` is the distance
+at the reference force ``f_ref`` (the controller's nominal 10 N, where it is known without ``k``).
+
 Both projections are linear in the positions, so one recursive least-squares (Kalman) estimate
 with covariance ``P`` covers every case of the paper. What the contact modes allow to change is
 *released* (its row and column of ``P`` cleared, its variance set to ``prior_std²``) before the
@@ -88,15 +97,17 @@ from ccopt import geometry
 from ccopt.estimation.quantile import check_count, check_number
 from ccopt.modes import ContactConfiguration, ContactMode, HandGeometry
 
-D, X_O, Y_O, S_H, C = range(5)
-"""Indices of the estimated state ``(d, x_o, y_o, s_h, c)`` (m, m, m, m, rad/(N·m))."""
+D, X_O, Y_O, S_H, C, K = range(6)
+"""Indices of the estimated state ``(d, x_o, y_o, s_h, c, k)`` (m, m, m, m, rad/(N·m), m/N)."""
+_SIZE = 6
 _CONTACT = (D, X_O, Y_O)
 _POSITIONS = (D, X_O, Y_O, S_H)
-_Row = tuple[float, float, float, float, float]
+_Row = tuple[float, float, float, float, float, float]
 _Prediction = tuple[_Row, float, float]
 """``(P hᵀ, innovation, innovation variance)`` of one scalar measurement."""
-_Frame = tuple[float, float, float, float, float]
-"""The estimated object frame of one sample: ``(ê_n, ê_t, τ)`` flattened (world, N·m)."""
+_Frame = tuple[float, float, float, float, float, float]
+"""The estimated object frame of one sample and its wrench: ``(ê_n, ê_t, τ, f_n − f_ref)`` flattened
+(world, N·m, N)."""
 _PIVOT_ITERATIONS = 8
 
 
@@ -115,6 +126,13 @@ class KinematicsParams:
         compliance_prior: the contact's rotational compliance ``c`` before any data (rad/(N·m));
             0 (a rigid contact) unless known, e.g. from an earlier run's estimate.
         compliance_std: its standard deviation before any data (rad/(N·m)).
+        normal_compliance_prior: the contacts' normal compliance ``k`` before any data (m/N): how far
+            the hand face sinks towards the ground contact per newton of normal force (both contacts'
+            penetration; 0.06 mm/N on the default plants).
+        normal_compliance_std: its standard deviation before any data (m/N).
+        reference_force: the normal force at which ``d`` is reported (N): the face sits at
+            ``d − k (f_n − reference_force)``. Near the forces the controller holds, so that ``d``
+            stays known while ``f_n`` does not vary and ``k`` cannot be told from it.
         valid_std: estimates are valid once their standard deviation is at most this (m).
         rough_std: means are reported (rough, not yet valid) once their standard deviation is at
             most this (m).
@@ -137,6 +155,9 @@ class KinematicsParams:
     prior_std: float = 1.0
     compliance_prior: float = 0.0
     compliance_std: float = 0.1
+    normal_compliance_prior: float = 0.0
+    normal_compliance_std: float = 1e-4
+    reference_force: float = 10.0
     valid_std: float = 3e-3
     rough_std: float = 0.05
     gate: float = 6.0
@@ -150,6 +171,9 @@ class KinematicsParams:
         check_number("prior_std", self.prior_std)
         check_number("compliance_prior", self.compliance_prior, low=-math.inf)
         check_number("compliance_std", self.compliance_std, low_open=False)
+        check_number("normal_compliance_prior", self.normal_compliance_prior, low=-math.inf)
+        check_number("normal_compliance_std", self.normal_compliance_std, low_open=False)
+        check_number("reference_force", self.reference_force, low_open=False)
         check_number("valid_std", self.valid_std)
         check_number("rough_std", self.rough_std, low=self.valid_std, low_open=False)
         check_number("gate", self.gate)
@@ -179,6 +203,7 @@ class KinematicEstimate:
             contact (pivoting), rad; the angle noise is not included. NaN unless ``theta_o_valid``.
         compliance: the estimated compliance ``c`` of the hand contact, rad/(N·m).
         compliance_std: its standard deviation, rad/(N·m).
+        normal_compliance: the estimated normal compliance ``k`` of the contacts, m/N.
         resets: how many times the estimate was reset (:meth:`KinematicEstimator.reset`).
         anchor: changes whenever the ground contact ``r_o`` may have moved (a reset, a ground
             slide followed); samples with the same ``anchor`` share one ``r_o``.
@@ -199,6 +224,7 @@ class KinematicEstimate:
     theta_std: float = math.nan
     compliance: float = math.nan
     compliance_std: float = math.nan
+    normal_compliance: float = math.nan
     resets: int = 0
     anchor: int = 0
     ground_fixed: bool = False
@@ -208,7 +234,7 @@ class KinematicEstimator:
     """Mode-switched extended Kalman filter on paper eqs. 14–16 with the contact compliance (see the
     module docstring).
 
-    The state (5) and covariance (5×5) are plain Python lists: at this size that is several times
+    The state (6) and covariance (6×6) are plain Python lists: at this size that is several times
     faster than NumPy.
     """
 
@@ -222,9 +248,11 @@ class KinematicEstimator:
         self._gate_squared = self.params.gate**2
         self._slip_gate_squared = self.params.slip_gate**2
         self._hand_slip_gate_squared = self.params.hand_slip_gate**2
-        self._state = [0.0, 0.0, 0.0, 0.0, self.params.compliance_prior]
-        self._cov = [[0.0] * 5 for _ in range(5)]
-        self._cov[C][C] = self.params.compliance_std**2
+        params = self.params
+        self._state = [0.0, 0.0, 0.0, 0.0, params.compliance_prior, params.normal_compliance_prior]
+        self._cov = [[0.0] * _SIZE for _ in range(_SIZE)]
+        self._cov[C][C] = params.compliance_std**2
+        self._cov[K][K] = params.normal_compliance_std**2
         self.resets = -1
         """How many times the estimate was reset."""
         self.anchor = -1
@@ -232,7 +260,7 @@ class KinematicEstimator:
         self.reset()
 
     def reset(self) -> None:
-        """Forget the configuration (the motion was indeterminate); the compliance is kept."""
+        """Forget the configuration (the motion was indeterminate); the compliances are kept."""
         self._state[: S_H + 1] = [0.0] * 4
         self._release(*_POSITIONS)
         self._last_theta = math.nan  # hand angle at the last eq. 15 sample
@@ -254,6 +282,7 @@ class KinematicEstimator:
         ground_may_slide: bool = False,
         torque: float = 0.0,
         hand_may_slide: bool = False,
+        normal_force: float | None = None,
     ) -> KinematicEstimate:
         """Advance with one measured hand pose ``(x_h, y_h, θ_h)`` (world, m/rad).
 
@@ -263,13 +292,15 @@ class KinematicEstimator:
         was reported sliding although ``modes`` says it sticks (see the module docstring), ``torque``
         the measured ``τ`` (N·m) that tilts a flush hand against the object, ``hand_may_slide``
         whether the hand was reported sliding although ``modes`` says it sticks (its eq. 16 gate is
-        then ``hand_slip_gate``).
+        then ``hand_slip_gate``), ``normal_force`` the measured ``f_n`` (N) that presses the contacts
+        in (None: ``reference_force``).
         """
         pose = hand_pose.tolist()
         flush = modes.hand_geometry == HandGeometry.FLUSH
         ground_sticks = modes.ground_mode == ContactMode.STICK
         hand_sticks = modes.hand_mode == ContactMode.STICK
-        frame = self._object_frame(e_n, e_t, torque)
+        force = 0.0 if normal_force is None else normal_force - self.params.reference_force
+        frame = self._object_frame(e_n, e_t, torque, force)
         self._ground_slipping = self._ground_slipping and ground_may_slide
         pivot_ok, fixed = True, False
         if not in_contact:
@@ -292,8 +323,10 @@ class KinematicEstimator:
                 self._flush_angle(pose[2], torque)
         return self._estimate(in_contact and pivot_ok, torque if flush else 0.0, fixed)
 
-    def _object_frame(self, e_n: Sequence[float], e_t: Sequence[float], torque: float) -> _Frame:
-        """``(ê_n, ê_t, τ)``: the hand axes turned by ``−ĉ τ`` to the object face's."""
+    def _object_frame(
+        self, e_n: Sequence[float], e_t: Sequence[float], torque: float, force: float
+    ) -> _Frame:
+        """``(ê_n, ê_t, τ, f_n − f_ref)``: the hand axes turned by ``−ĉ τ`` to the object face's."""
         tilt = self._state[C] * torque
         cos, sin = math.cos(tilt), math.sin(tilt)
         return (
@@ -302,6 +335,7 @@ class KinematicEstimator:
             e_t[0] * cos + e_n[0] * sin,
             e_t[1] * cos + e_n[1] * sin,
             torque,
+            force,
         )
 
     def _flush_angle(self, theta_h: float, torque: float) -> None:
@@ -380,7 +414,7 @@ class KinematicEstimator:
         """Forget what is known about the given state components (they may have changed)."""
         cov = self._cov
         for index in indices:
-            for other in range(5):
+            for other in range(_SIZE):
                 cov[index][other] = cov[other][index] = 0.0
             cov[index][index] = self._prior_variance
         if S_H in indices:
@@ -402,17 +436,17 @@ class KinematicEstimator:
 
     def _normal_row(self, pose: list[float], frame: _Frame) -> tuple[_Row, float]:
         """Eq. 15 on the object frame, linearised in ``c``: ``row · x = value`` with
-        ``r_h·ê_n = −d + r_o·ê_n`` at ``ĉ`` and ``∂/∂c = −s_h τ``."""
+        ``r_h·ê_n = −d + k (f_n − f_ref) + r_o·ê_n`` at ``ĉ`` and ``∂/∂c = −s_h τ``."""
         slope = -self._state[S_H] * frame[4]
         value = pose[0] * frame[0] + pose[1] * frame[1] + slope * self._state[C]
-        return (-1.0, frame[0], frame[1], 0.0, slope), value
+        return (-1.0, frame[0], frame[1], 0.0, slope, frame[5]), value
 
     def _tangent_row(self, pose: list[float], frame: _Frame) -> tuple[_Row, float]:
         """Eq. 16 on the object frame, linearised in ``c``: ``row · x = value`` with
         ``r_h·ê_t = r_o·ê_t − s_h`` at ``ĉ`` and ``∂/∂c = d τ``."""
         slope = self._state[D] * frame[4]
         value = pose[0] * frame[2] + pose[1] * frame[3] + slope * self._state[C]
-        return (0.0, frame[2], frame[3], -1.0, slope), value
+        return (0.0, frame[2], frame[3], -1.0, slope, 0.0), value
 
     @staticmethod
     def _within(prediction: _Prediction, gate_squared: float) -> bool:
@@ -422,24 +456,26 @@ class KinematicEstimator:
 
     def _predict(self, row: _Row, value: float) -> _Prediction:
         """``(P hᵀ, innovation, innovation variance)`` of one measurement ``row · x = value``."""
-        h0, h1, h2, h3, h4 = row
-        state = self._state
-        r0, r1, r2, r3, r4 = self._cov  # P hᵀ, unrolled (a generator costs more than the sums)
-        c0 = r0[0] * h0 + r0[1] * h1 + r0[2] * h2 + r0[3] * h3 + r0[4] * h4
-        c1 = r1[0] * h0 + r1[1] * h1 + r1[2] * h2 + r1[3] * h3 + r1[4] * h4
-        c2 = r2[0] * h0 + r2[1] * h1 + r2[2] * h2 + r2[3] * h3 + r2[4] * h4
-        c3 = r3[0] * h0 + r3[1] * h1 + r3[2] * h2 + r3[3] * h3 + r3[4] * h4
-        c4 = r4[0] * h0 + r4[1] * h1 + r4[2] * h2 + r4[3] * h3 + r4[4] * h4
-        variance = c0 * h0 + c1 * h1 + c2 * h2 + c3 * h3 + c4 * h4 + self._noise_variance
-        innovation = value - (state[0] * h0 + state[1] * h1 + state[2] * h2 + state[3] * h3 + state[4] * h4)
-        return (c0, c1, c2, c3, c4), innovation, variance
+        h0, h1, h2, h3, h4, h5 = row
+        s = self._state
+        r0, r1, r2, r3, r4, r5 = self._cov  # P hᵀ, unrolled (a generator costs more than the sums)
+        c0 = r0[0] * h0 + r0[1] * h1 + r0[2] * h2 + r0[3] * h3 + r0[4] * h4 + r0[5] * h5
+        c1 = r1[0] * h0 + r1[1] * h1 + r1[2] * h2 + r1[3] * h3 + r1[4] * h4 + r1[5] * h5
+        c2 = r2[0] * h0 + r2[1] * h1 + r2[2] * h2 + r2[3] * h3 + r2[4] * h4 + r2[5] * h5
+        c3 = r3[0] * h0 + r3[1] * h1 + r3[2] * h2 + r3[3] * h3 + r3[4] * h4 + r3[5] * h5
+        c4 = r4[0] * h0 + r4[1] * h1 + r4[2] * h2 + r4[3] * h3 + r4[4] * h4 + r4[5] * h5
+        c5 = r5[0] * h0 + r5[1] * h1 + r5[2] * h2 + r5[3] * h3 + r5[4] * h4 + r5[5] * h5
+        variance = c0 * h0 + c1 * h1 + c2 * h2 + c3 * h3 + c4 * h4 + c5 * h5 + self._noise_variance
+        innovation = value - (s[0] * h0 + s[1] * h1 + s[2] * h2 + s[3] * h3 + s[4] * h4 + s[5] * h5)
+        return (c0, c1, c2, c3, c4, c5), innovation, variance
 
     def _apply(self, prediction: _Prediction) -> None:
         """Kalman update with a :meth:`_predict`-ed measurement (noise variance ``position_noise²``)."""
-        (c0, c1, c2, c3, c4), innovation, variance = prediction
+        column, innovation, variance = prediction
+        c0, c1, c2, c3, c4, c5 = column
         scale = 1.0 / variance
         state = self._state
-        for i, (r, c) in enumerate(zip(self._cov, (c0, c1, c2, c3, c4), strict=True)):
+        for i, (r, c) in enumerate(zip(self._cov, column, strict=True)):
             gain = c * scale
             state[i] += gain * innovation
             r[0] -= gain * c0
@@ -447,6 +483,7 @@ class KinematicEstimator:
             r[2] -= gain * c2
             r[3] -= gain * c3
             r[4] -= gain * c4
+            r[5] -= gain * c5
 
     def _scalar_update(self, row: _Row, value: float) -> None:
         """Kalman update with one measurement ``row · x = value``, ungated."""
@@ -511,6 +548,7 @@ class KinematicEstimator:
             theta_std=self._theta_std if self._theta_o_valid else nan,
             compliance=state[C],
             compliance_std=sqrt(max(cov[C][C], 0.0)),
+            normal_compliance=state[K],
             resets=self.resets,
             anchor=self.anchor,
             ground_fixed=fixed,
