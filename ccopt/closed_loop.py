@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from ccopt import geometry, validation
+from ccopt import geometry, modes, validation
 from ccopt.contact import GROUND_ROWS
 from ccopt.control.controller import Command, ControlInput, Controller, ControllerParams
 from ccopt.control.targets import UNJUDGED, StaticsTarget, statics_target
@@ -126,6 +126,7 @@ class StepResult:
     end_time: float
     status: str
     reason: str = ""
+    explore: bool = False
 
     @property
     def reached(self) -> bool:
@@ -262,9 +263,9 @@ class _StepTracker:
         self, now: float, estimate: Estimate, hand_pose: np.ndarray, status: str, reason: str = ""
     ) -> None:
         if self.index >= 0:
-            self.results.append(
-                StepResult(self.index, self.step.kind, self.step.delta, self.start_time, now, status, reason)
-            )
+            step = self.step
+            result = (self.index, step.kind, step.delta, self.start_time, now, status, reason, step.explore)
+            self.results.append(StepResult(*result))
         self.index += 1
         if self.done:
             return
@@ -449,7 +450,8 @@ class _Loop:
     def _sense(self) -> None:
         reading = self.sensors.read()
         time, pose, wrench = reading.time, reading.hand_pose, reading.hand_wrench
-        self.estimate = self.estimator.update(time, pose, wrench)
+        commanded = modes.configuration(self.tracker.command.motion) if self.tracker.command else None
+        self.estimate = self.estimator.update(time, pose, wrench, commanded)
         self.hand_pose = pose if bool(np.all(np.isfinite(pose))) else None
         sample = _sample(self.plant, reading, self.estimate, self.target, self.tracker, *self.last_solution)
         if self.writer is not None:

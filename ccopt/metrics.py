@@ -65,11 +65,12 @@ def _at(data: Mapping[str, np.ndarray], moment: float) -> int:
 
 
 def realised_ratios(data: Mapping[str, np.ndarray], steps: Sequence[Mapping[str, object]]) -> np.ndarray:
-    """True change of the commanded coordinate over each (non-hold) step, over the commanded change."""
+    """True change of the commanded coordinate over each (non-hold) step, over the commanded change;
+    exploration steps (which end by themselves, e.g. a friction probe) are not scored."""
     ratios = []
     for step in steps:
         k = modes.driven_coordinate(step["kind"])
-        if k is None:
+        if k is None or step.get("explore"):
             continue
         start, end = _at(data, step["start_time"]), _at(data, step["end_time"])
         change = data["true_coordinates"][end, k] - data["true_coordinates"][start, k]
@@ -176,7 +177,7 @@ def summarize(
     slips = unintended_slips(data, steps)
     contacts = np.asarray(data["true_contacts"], dtype=bool)
     kept_contact = bool(np.mean(contacts.all(axis=1)) >= CONTACT_SHARE) if contacts.size else False
-    steps_done = sum(bool(step["reached"]) for step in steps)
+    steps_done = sum(bool(step["reached"] or step.get("explore")) for step in steps)
     valid = np.asarray(data["est_kinematics_valid"], dtype=bool)
     return {
         "status": status,

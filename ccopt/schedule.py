@@ -18,6 +18,7 @@ in the paper's increments of 7.2°, 10 mm and 10 mm) and ``smoke`` (pivots both 
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from dataclasses import dataclass
@@ -48,6 +49,8 @@ class Step:
         delta: increment of the coordinate, rad (pivot) or m (slides); 0 for a hold.
         tolerance: the step is done when the estimated error is below this (rad or m).
         timeout: the step gives up after this long, s (a hold lasts exactly this long).
+        explore: the step is part of an exploration (:func:`exploration`): it ends by itself,
+            reached or not, and its realised change is not scored.
 
     Raises ``ValueError`` naming the value: an unknown kind, a number that is not finite, a zero
     increment or tolerance, a timeout not in (0, :data:`MAX_TIMEOUT`], an increment or tolerance
@@ -58,6 +61,7 @@ class Step:
     delta: float = 0.0
     tolerance: float = 0.0
     timeout: float = DEFAULT_TIMEOUT
+    explore: bool = False
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
@@ -102,6 +106,32 @@ def slide_ground(millimetres: float, timeout: float = DEFAULT_TIMEOUT) -> Step:
 
 def hold(seconds: float) -> Step:
     return Step("hold", 0.0, 0.0, seconds)
+
+
+EXPLORE_PIVOT_DEG = 7.2
+EXPLORE_PROBE_MM = 3.0
+EXPLORE_TIMEOUT = 3.0
+
+
+def exploration(
+    pivot_deg: float = EXPLORE_PIVOT_DEG, probe_mm: float = EXPLORE_PROBE_MM, timeout: float = EXPLORE_TIMEOUT
+) -> tuple[Step, ...]:
+    """What the estimator needs before the object can be manipulated (paper §VI), as steps.
+
+    Pivots both ways about the ground contact (``±pivot_deg``, back to the start): the kinematics
+    (``d``, ``r_o``, ``s_h``) and the gravity moment need the object turned. Then a hand-slide probe
+    each way (``±probe_mm``, at most ``timeout`` s): the tangential force is pushed past the estimated
+    friction bound, moment kept balanced, until the hand slides — which gives ``μ_h`` — or the torque
+    limit stops it — which still raises the (conservative) estimate to the ratio reached. The probes
+    end by themselves whether or not the hand slid.
+    """
+    angle = np.deg2rad(pivot_deg)
+    tolerance = DEFAULT_TOLERANCE["pivot"]
+    pivots = tuple(Step("pivot", sign * angle, tolerance, DEFAULT_TIMEOUT, True) for sign in (1, -1, -1, 1))
+    probe = probe_mm * 1e-3
+    tolerance = DEFAULT_TOLERANCE["slide_hand"]
+    probes = tuple(Step("slide_hand", sign * probe, tolerance, timeout, True) for sign in (1, -1))
+    return pivots + probes
 
 
 @dataclass(frozen=True)
@@ -191,7 +221,8 @@ def schedule_from_dict(content: object, default_name: str = "custom") -> Schedul
     unknown = set(content) - {"name", "steps"}
     if unknown:
         raise ValueError(f"unknown schedule key(s): {_keys(unknown)}")
-    steps = tuple(_step_from_dict(index, entry) for index, entry in enumerate(content["steps"]))
+    entries = enumerate(content["steps"])
+    steps = tuple(step for index, entry in entries for step in _steps_from_dict(index, entry))
     return Schedule(str(content.get("name", default_name)), steps)
 
 
@@ -202,13 +233,33 @@ _FIELDS = {
 }
 
 
-def _step_from_dict(index: int, entry: object) -> Step:
+def _steps_from_dict(index: int, entry: object) -> tuple[Step, ...]:
     where = f"step {index + 1}"
     if not isinstance(entry, dict) or "motion" not in entry:
         raise ValueError(f"{where}: expected a mapping with a 'motion' key, got {entry!r}")
     kind = entry["motion"]
+    if kind == "explore":
+        _only(entry, {"motion", "pivot_deg", "probe_mm", "timeout_s"}, where)
+        options = {
+            name: _number(entry[key], f"{where} {key}")
+            for name, key in (("pivot_deg", "pivot_deg"), ("probe_mm", "probe_mm"), ("timeout", "timeout_s"))
+            if key in entry
+        }
+        try:
+            return exploration(**options)
+        except ValueError as error:
+            raise ValueError(f"{where}: {error}") from None
     if kind not in KINDS:
-        raise ValueError(f"{where}: unknown motion {kind!r}; expected one of: {', '.join(KINDS)}")
+        choices = ", ".join((*KINDS, "explore"))
+        raise ValueError(f"{where}: unknown motion {kind!r}; expected one of: {choices}")
+    explore = entry.get("explore", False)
+    if not isinstance(explore, bool):
+        raise ValueError(f"{where}: explore must be true or false, got {explore!r}")
+    step = _step_from_dict(where, kind, {key: value for key, value in entry.items() if key != "explore"})
+    return (dataclasses.replace(step, explore=explore),)
+
+
+def _step_from_dict(where: str, kind: str, entry: dict) -> Step:
     try:
         if kind == "hold":
             _only(entry, {"motion", "duration_s"}, where)
@@ -256,6 +307,10 @@ def _number(value: object, name: str) -> float:
 
 
 def _step_to_dict(step: Step) -> dict[str, object]:
+    return {**_motion_to_dict(step), **({"explore": True} if step.explore else {})}
+
+
+def _motion_to_dict(step: Step) -> dict[str, object]:
     if step.kind == "hold":
         return {"motion": "hold", "duration_s": step.timeout}
     if step.kind == "pivot":

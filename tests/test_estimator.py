@@ -9,9 +9,16 @@ import numpy as np
 import pytest
 
 from ccopt import contact, geometry
-from ccopt.estimation import Estimator, EstimatorParams, HandFrictionParams, KinematicsParams, replay
+from ccopt.estimation import (
+    Estimator,
+    EstimatorParams,
+    HandFrictionParams,
+    KinematicsParams,
+    commanded_modes,
+    replay,
+)
 from ccopt.hand import Hand
-from ccopt.modes import ContactMode, HandGeometry
+from ccopt.modes import ContactConfiguration, ContactMode, HandGeometry
 
 MU_H, MU_G, MASS, L_H, D = 0.5, 0.8, 0.3, 0.05, 0.06
 RATE = 1000.0
@@ -224,3 +231,43 @@ def test_conservative_ground_reports_do_not_stop_the_kinematics():
     assert reported_sliding > 0.2 * len(times)  # the conservative classifier does say it
     assert estimate.kinematics_valid
     assert abs(estimate.d - D) < 2e-3 and np.all(np.abs(estimate.r_o - r_o) < 2e-3)
+
+
+@pytest.mark.parametrize(
+    ("command", "kept"),
+    [
+        (ContactConfiguration(), ContactConfiguration()),
+        (
+            ContactConfiguration(hand_mode=ContactMode.SLIDE_NEG),
+            ContactConfiguration(hand_mode=ContactMode.SLIDE_POS),
+        ),
+        (
+            ContactConfiguration(ground_mode=ContactMode.SLIDE_POS),
+            ContactConfiguration(ground_mode=ContactMode.SLIDE_NEG),
+        ),
+    ],
+)
+def test_a_command_keeps_the_contacts_it_keeps_and_takes_the_moving_one_as_reported(command, kept):
+    reported = ContactConfiguration(ContactMode.SLIDE_POS, HandGeometry.PIVOT_NEG, ContactMode.SLIDE_NEG)
+    assert commanded_modes(reported, command) == kept
+    assert commanded_modes(reported, None) == reported
+
+
+def test_a_sticking_command_lets_the_kinematics_converge_through_conservative_hand_reports():
+    """A rigid rotation with the hand pressing at |f_t| = 0.3 f_n (inside the true cone, μ_h = 0.5,
+    but beyond the hand friction prior): the hand "may slide" on every sample, so without the
+    command ``s_h`` is released each time; with it, the regression uses eq. 16 and converges."""
+    rng = np.random.default_rng(4)
+    r_o, hand = np.array([0.10, 0.0]), Hand(half_length=L_H)
+    told, untold = Estimator(hand), Estimator(hand)
+    for t in np.arange(2000) / RATE:
+        theta = math.radians(10.0) * math.sin(2.0 * math.pi * t / 1.5)
+        pose = geometry.hand_pose_from_contact(theta, 0.01, D, r_o) + rng.normal(0.0, NOISE_POSE)
+        wrench = np.array([12.0, 3.6, 0.0]) + rng.normal(0.0, NOISE_WRENCH)
+        with_command = told.update(t, pose, wrench, ContactConfiguration())
+        without = untold.update(t, pose, wrench)
+    assert with_command.hand_mode != ContactMode.STICK  # the report itself is unchanged
+    assert with_command.kinematics_valid and abs(with_command.d - D) < 2e-3
+    assert not without.kinematics_valid
+    assert np.all(np.isfinite(without.kinematics_mean))  # rough, for a controller
+    assert max(without.kinematics_std[1:]) > max(with_command.kinematics_std[1:])

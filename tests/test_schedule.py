@@ -70,3 +70,22 @@ def test_unknown_names_and_missing_files():
         schedule.load_schedule("fancy")
     with pytest.raises(ValueError, match="cannot read"):
         schedule.load_schedule("/no/such/file.yaml")
+
+
+def test_an_explore_step_expands_into_pivots_both_ways_and_friction_probes():
+    explore = {"motion": "explore", "pivot_deg": 5.0, "probe_mm": 2.0}
+    explored = schedule.schedule_from_dict({"steps": [explore]})
+    kinds = [(step.kind, round(float(np.sign(step.delta)))) for step in explored.steps]
+    pivots = [("pivot", 1), ("pivot", -1), ("pivot", -1), ("pivot", 1)]
+    assert kinds == [*pivots, ("slide_hand", 1), ("slide_hand", -1)]
+    assert all(step.explore for step in explored.steps)
+    assert sum(step.delta for step in explored.steps if step.kind == "pivot") == pytest.approx(0.0)
+    assert schedule.schedule_from_dict(explored.to_dict()).steps == explored.steps  # the file keeps the flag
+
+
+def test_exploration_steps_are_not_scored():
+    from ccopt import metrics
+
+    data = {"time": np.array([0.0, 1.0]), "true_coordinates": np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]])}
+    probe = {"kind": "slide_hand", "delta": 0.003, "start_time": 0.0, "end_time": 1.0, "explore": True}
+    assert metrics.realised_ratios(data, [probe]).size == 0

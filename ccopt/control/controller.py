@@ -377,7 +377,7 @@ class Controller:
         )
         if state.statics_margin is not None and math.isfinite(state.statics_margin):
             # the statics' wrench keeps this margin on every row (N; torque rows over l_h): keep the
-            # QP's rows no stricter, so that the QP can reach it
-            share = max(p.statics_margin_share * state.statics_margin, p.min_margin)
-            margins = np.minimum(margins, share * _row_units(state.l_h))
+            # QP's rows no stricter, so that the QP can reach it, but never below half their own
+            share = p.statics_margin_share * state.statics_margin * _row_units(state.l_h)
+            margins = np.maximum(np.minimum(margins, share), 0.5 * margins)
         return margins

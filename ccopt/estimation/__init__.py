@@ -3,8 +3,9 @@ wrench and pose alone. :class:`Estimator` is the entry point; the modules are it
 
 from ccopt.estimation.angle_filter import AngleFilter, AngleFilterParams
 from ccopt.estimation.classifier import ModeClassifier, ModeParams
-from ccopt.estimation.estimator import Estimate, Estimator, EstimatorParams, replay
+from ccopt.estimation.estimator import Estimate, Estimator, EstimatorParams, commanded_modes, replay
 from ccopt.estimation.friction import HandFrictionEstimator, HandFrictionParams
+from ccopt.estimation.gravity import GravityEstimate, GravityEstimator, GravityParams
 from ccopt.estimation.ground_cone import GroundCone, GroundConeEstimator, GroundConeParams
 from ccopt.estimation.kinematics import KinematicEstimate, KinematicEstimator, KinematicsParams
 from ccopt.estimation.quantile import P2Quantile, P2QuantileBank
@@ -15,6 +16,9 @@ __all__ = [
     "Estimate",
     "Estimator",
     "EstimatorParams",
+    "GravityEstimate",
+    "GravityEstimator",
+    "GravityParams",
     "GroundCone",
     "GroundConeEstimator",
     "GroundConeParams",
@@ -27,5 +31,6 @@ __all__ = [
     "ModeParams",
     "P2Quantile",
     "P2QuantileBank",
+    "commanded_modes",
     "replay",
 ]

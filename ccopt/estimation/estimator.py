@@ -13,9 +13,13 @@ m/rad) and hand wrench ``(f_n, f_t, τ)`` (hand frame, N and N·m, :mod:`ccopt.g
 4. the kinematic estimator (:mod:`.kinematics`) under the most likely modes, except for ground-slide
    reports the kinematics cannot act on (:func:`kinematic_modes`): the paper's warm start regresses
    the ground contact while the controller enforces sticking, and the regression's own innovation
-   gate, not the conservative report, tells when the contact really moved;
-5. while the hand is flush, ``θ_o`` (the hand's angle) through a constant-rate Kalman filter
-   (:mod:`.angle_filter`), which averages the angle noise without lagging a pivot.
+   gate, not the conservative report, tells when the contact really moved. Given the commanded
+   configuration, the kinematics take every contact it keeps as kept (:func:`commanded_modes`);
+5. while the hand is flush, ``θ_o`` (the hand's angle less the contact's compliant tilt) through a
+   constant-rate Kalman filter (:mod:`.angle_filter`), which averages the angle noise without
+   lagging a pivot;
+6. the weight's moment about the ground contact, ``M(θ_o)`` (:mod:`.gravity`), from the samples the
+   kinematics regressed on a fixed ground contact.
 
 Samples with a non-finite pose or wrench (sensor dropouts), or a value beyond what any run of this
 robot can produce (:data:`SAMPLE_BOUNDS`: a glitch, not a measurement), change nothing: the previous
@@ -41,6 +45,8 @@ from ccopt.contact import N_CONE_ROWS
 from ccopt.estimation.angle_filter import AngleFilter, AngleFilterParams
 from ccopt.estimation.classifier import ModeClassifier, ModeParams
 from ccopt.estimation.friction import HandFrictionEstimator, HandFrictionParams
+from ccopt.estimation.gravity import UNKNOWN as UNKNOWN_GRAVITY
+from ccopt.estimation.gravity import GravityEstimate, GravityEstimator, GravityParams
 from ccopt.estimation.ground_cone import GroundCone, GroundConeEstimator, GroundConeParams
 from ccopt.estimation.kinematics import KinematicEstimate, KinematicEstimator, KinematicsParams
 from ccopt.estimation.quantile import check_number
@@ -80,6 +86,7 @@ class EstimatorParams:
             1.5 N. On a plant recording this halved the worst ``s_h``/``s_g`` errors after a ground slide
             (4.7 → 1.1 mm).
         kinematics: kinematic estimator.
+        gravity: the weight's moment about the ground contact.
         theta_filter: filter of ``θ_o`` while it is the hand's angle (flush hand).
         contact_force: the hand is in contact while ``f_n`` exceeds this (N).
     """
@@ -89,6 +96,7 @@ class EstimatorParams:
     modes: ModeParams = field(default_factory=ModeParams)
     kinematic_modes: ModeParams = field(default_factory=lambda: ModeParams(slide_margin=1.0))
     kinematics: KinematicsParams = field(default_factory=KinematicsParams)
+    gravity: GravityParams = field(default_factory=GravityParams)
     theta_filter: AngleFilterParams = field(default_factory=AngleFilterParams)
     contact_force: float = 1.0
 
@@ -99,6 +107,7 @@ class EstimatorParams:
             ("modes", ModeParams),
             ("kinematic_modes", ModeParams),
             ("kinematics", KinematicsParams),
+            ("gravity", GravityParams),
             ("theta_filter", AngleFilterParams),
         )
         validation.check_types((name, getattr(self, name), kind) for name, kind in parts)
@@ -129,6 +138,18 @@ class Estimate:
         theta_o_valid, s_h_valid: whether ``theta_o`` and ``s_h`` are estimated.
         contact_valid: whether ``d``, ``r_o`` and ``s_g`` are estimated.
         skipped: True if this sample was not finite and nothing was updated.
+        kinematics_mean: ``(θ_o, s_h, s_g, d)`` (rad, m) *before* they are valid too: each is NaN
+            only while it is unknown (``θ_o`` out of contact; a position whose standard deviation
+            exceeds ``KinematicsParams.rough_std``, 5 cm by default; ``s_h`` also out of contact).
+            A controller may use them, weighed by ``kinematics_std``, before ``kinematics_valid``;
+            once valid they equal the fields above.
+        kinematics_std: standard deviations of ``kinematics_mean`` (rad, m; NaN for ``θ_o`` while it
+            is unknown). ``θ_o``'s combines the angle noise (unfiltered, an upper bound) and the
+            compliance's uncertainty times ``|τ|``.
+        compliance, compliance_std: the estimated rotational compliance of the hand contact,
+            ``θ_h − θ_o = c τ`` (rad/(N·m), :mod:`.kinematics`), and its standard deviation.
+        gravity: ``M̂(θ)``, the weight's moment about the ground contact, with its covariance
+            (:class:`~ccopt.estimation.gravity.GravityEstimate`).
     """
 
     time: float
@@ -156,6 +177,11 @@ class Estimate:
     s_h_valid: bool
     contact_valid: bool
     skipped: bool = False
+    kinematics_mean: tuple[float, float, float, float] = (math.nan,) * 4
+    kinematics_std: tuple[float, float, float, float] = (math.nan,) * 4
+    compliance: float = math.nan
+    compliance_std: float = math.nan
+    gravity: GravityEstimate = UNKNOWN_GRAVITY
 
     @property
     def kinematics_valid(self) -> bool:
@@ -187,12 +213,22 @@ class Estimator:
         self.kinematic_classifier = ModeClassifier(self.params.kinematic_modes)
         self.kinematics = KinematicEstimator(self.hand.half_length, self.params.kinematics)
         self.theta_filter = AngleFilter(self.params.theta_filter)
+        self.gravity = GravityEstimator(self.params.gravity)
         self._cone_input = np.zeros(12)
         self._cone_ground: GroundCone | None = None
         self._last: Estimate | None = None
 
-    def update(self, time: float, hand_pose: ArrayLike, hand_wrench: ArrayLike) -> Estimate:
+    def update(
+        self,
+        time: float,
+        hand_pose: ArrayLike,
+        hand_wrench: ArrayLike,
+        commanded: ContactConfiguration | None = None,
+    ) -> Estimate:
         """Process one sample: ``hand_pose = (x_h, y_h, θ_h)`` (world), ``hand_wrench = (f_n, f_t, τ)``.
+
+        ``commanded`` is the configuration the controller enforces (None: unknown); the kinematics
+        then trust it for every contact it keeps (:func:`commanded_modes`).
 
         Raises ``TypeError`` or ``ValueError`` (and changes nothing) unless ``time`` is a real
         number and the pose and wrench are three numbers each, all within the float range.
@@ -224,13 +260,17 @@ class Estimator:
         margin_list = margins.tolist()
         modes = self.classifier.update(time, margin_list, valid)
         likely = self.kinematic_classifier.update(time, margin_list, valid)
+        ground_may_slide, hand_may_slide = _unacted_reports(likely, commanded)
         kinematics = self.kinematics.update(
             pose,
             e_n,
             e_t,
-            kinematic_modes(likely, ground),
+            kinematic_modes(commanded_modes(likely, commanded), ground),
             in_contact,
-            ground_may_slide=likely.ground_mode != ContactMode.STICK,
+            ground_may_slide,
+            torque=values[6],
+            hand_may_slide=hand_may_slide,
+            normal_force=f_n,
         )
         theta_o = kinematics.theta_o
         if in_contact and kinematics.theta_o_valid and likely.hand_geometry == HandGeometry.FLUSH:
@@ -239,8 +279,23 @@ class Estimator:
             self.theta_filter.reset()
         cone = (cone_rows, cone_bounds, margins)
         parts = (valid, friction, ground, modes, in_contact, theta_o, kinematics)
-        self._last = _assemble(time, wrench, cone, *parts)
+        gravity = self.gravity.update(
+            theta_o, values[1:4], values[4:7], kinematics, self.kinematics.ground_contact()
+        )
+        self._last = _assemble(
+            time, wrench, cone, *parts, rough=self._rough(theta_o, kinematics), gravity=gravity
+        )
         return self._last
+
+    def _rough(
+        self, theta_o: float, kinematics: KinematicEstimate
+    ) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        """``(kinematics_mean, kinematics_std)`` of the :class:`Estimate`."""
+        d, x_o, _, s_h = kinematics.rough
+        std_d, std_x, _, std_s = kinematics.std
+        theta_std = math.hypot(kinematics.theta_std, self.params.theta_filter.noise)
+        theta = theta_o if kinematics.theta_o_valid else math.nan
+        return (theta, s_h, x_o, d), (theta_std, std_s, std_x, std_d)
 
     def _cone(
         self, theta_h: float, mu_h: float, l_h: float, ground: GroundCone, wrench: np.ndarray
@@ -262,6 +317,40 @@ class Estimator:
         if self._last is None:
             return _empty_estimate(time, self.friction, self.ground)
         return dataclasses.replace(self._last, time=float(time), skipped=True)
+
+
+def commanded_modes(
+    modes: ContactConfiguration, commanded: ContactConfiguration | None
+) -> ContactConfiguration:
+    """The reported ``modes`` with every contact ``commanded`` keeps (sticking, flush) kept.
+
+    The paper's kinematic estimator relies on the controller enforcing sticking. The classifier is
+    conservative (a contact near an estimated boundary "may be moving", and the hand friction prior
+    is far below the truth at first), so a report of a contact the controller keeps is not acted
+    on: the kinematics' innovation gates catch a contact that moved all the same. Only a contact
+    the command sets moving is taken as reported. None (no command known) keeps the reports.
+    """
+    if commanded is None:
+        return modes
+    return ContactConfiguration(
+        modes.hand_mode if commanded.hand_mode != ContactMode.STICK else ContactMode.STICK,
+        modes.hand_geometry if commanded.hand_geometry != HandGeometry.FLUSH else HandGeometry.FLUSH,
+        modes.ground_mode if commanded.ground_mode != ContactMode.STICK else ContactMode.STICK,
+    )
+
+
+def _unacted_reports(
+    likely: ContactConfiguration, commanded: ContactConfiguration | None
+) -> tuple[bool, bool]:
+    """``(ground_may_slide, hand_may_slide)`` for the kinematics: a contact reported sliding that the
+    kinematics still take as sticking. Without a command, a ground-slide report (the kinematics then
+    follow a slip their gate sees, :func:`kinematic_modes`); with one, a hand-slide report while the
+    command keeps the hand sticking (its eq. 16 gate is then tighter, to catch a creeping slide)."""
+    if commanded is None:
+        return likely.ground_mode != ContactMode.STICK, False
+    hand = commanded.hand_mode == ContactMode.STICK and likely.hand_mode != ContactMode.STICK
+    ground = commanded.ground_mode != ContactMode.STICK and likely.ground_mode != ContactMode.STICK
+    return ground, hand
 
 
 def kinematic_modes(modes: ContactConfiguration, ground: GroundCone) -> ContactConfiguration:
@@ -304,8 +393,12 @@ def _assemble(
     theta_o: float,
     kinematics: KinematicEstimate,
     skipped: bool = False,
+    *,
+    rough: tuple[tuple[float, ...], tuple[float, ...]] = ((math.nan,) * 4, (math.nan,) * 4),
+    gravity: GravityEstimate = UNKNOWN_GRAVITY,
 ) -> Estimate:
-    """An :class:`Estimate` from its parts (its arrays made read-only)."""
+    """An :class:`Estimate` from its parts (its arrays made read-only); ``rough`` is
+    ``(kinematics_mean, kinematics_std)``."""
     row_valid = np.array(valid)
     wrench.flags.writeable = False
     row_valid.flags.writeable = False
@@ -328,12 +421,25 @@ def _assemble(
         theta_o=theta_o,
         **{name: getattr(kinematics, name) for name in _KINEMATIC_FIELDS},
         skipped=skipped,
+        kinematics_mean=rough[0],
+        kinematics_std=rough[1],
+        gravity=gravity,
     )
 
 
 _MODE_FIELDS = ("hand_mode", "hand_geometry", "ground_mode")
 """Fields an :class:`Estimate` takes from the classified :class:`~ccopt.modes.ContactConfiguration`."""
-_KINEMATIC_FIELDS = ("s_h", "s_g", "d", "r_o", "theta_o_valid", "s_h_valid", "contact_valid")
+_KINEMATIC_FIELDS = (
+    "s_h",
+    "s_g",
+    "d",
+    "r_o",
+    "theta_o_valid",
+    "s_h_valid",
+    "contact_valid",
+    "compliance",
+    "compliance_std",
+)
 """Fields an :class:`Estimate` takes from the :class:`~ccopt.estimation.kinematics.KinematicEstimate`
 (its ``θ_o`` goes through the angle filter first)."""
 

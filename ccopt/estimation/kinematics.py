@@ -7,10 +7,39 @@ measured hand pose to the unknowns ``(d, x_o, y_o, s_h)``:
     r_h·e_n = −d + x_o (I·e_n) + y_o (J·e_n)        (eq. 15, the paper's regression)
     r_h·e_t = x_o (I·e_t) + y_o (J·e_t) − s_h        (eq. 16: s_h = (r_o − r_h)·e_t)
 
-Both projections are linear in the unknowns, so one recursive least-squares (Kalman) estimate of
-``x = (d, x_o, y_o, s_h)`` with covariance ``P`` covers every case of the paper. What the contact
-modes allow to change is *released* (its row and column of ``P`` cleared, its variance set to
-``prior_std²``) before the measurement update:
+**Contact compliance.** A flush contact is not rigid: the hand tilts against the object face by
+``δ = θ_h − θ_o = c τ`` under the torque ``τ`` it exerts (on the planar plant ``c`` ≈ 0.025–0.046
+rad/(N·m) depending on the object, residual ≈ 0.06°; ``|τ|`` reaches 0.4 N·m, so ``δ`` reaches 1°,
+and ``d δ`` ≈ 2 mm of position). Eq. 14 holds in the *object's* frame, ``e_n(θ_o)``, ``e_t(θ_o)``
+with ``θ_o = θ_h − c τ``: taken at ``θ_h``, it biases ``d`` by up to 10 mm and its innovations fail
+the gates. The compliance ``c`` is a property of the contact (hand pad and object), so it is
+estimated online as a fifth unknown, from a prior of zero with standard deviation
+``compliance_std``, by an extended Kalman filter on ``x = (d, x_o, y_o, s_h, c)``: eqs. 15–16 are
+projected on the estimated object frame ``ê = e(θ_h − ĉ τ)``, and their linearisation in ``c``
+(``∂e_n/∂θ = e_t``, ``∂e_t/∂θ = −e_n``) adds the columns ``−s_h τ`` to eq. 15 and ``d τ`` to eq. 16.
+``c`` is observable because ``τ`` does not follow ``θ_o`` alone (holds and the controller's wrench
+changes turn the hand without turning the object); while it is poorly known its uncertainty enters
+every prediction, so the gates and the standard deviations stay honest. Where ``τ`` does follow
+``θ_o`` (``τ ≈ α + β θ_o``, as gravity's moment makes it in a pivot), eq. 16 sees ``y_o + d c β``
+and eq. 15 ``d + y_o``: ``c``, ``d`` and ``y_o`` are then confounded to first order, and in closed
+loop the kinematics become valid only once pivots have visited about 14° of ``θ_o`` (with ``c``
+known, half that). A wrench that varies at a fixed angle (e.g. the normal force, which moves ``τ``
+by ``s_h Δf_n``) pins ``c`` down. ``c`` survives a reset (it belongs to the contact, not to the
+configuration); only its correlations are forgotten.
+
+**Normal compliance.** Both contacts also give along the normal: the hand face sinks towards the
+ground contact by ``k f_n`` (the penetrations of the hand and ground contacts; 0.06 mm/N on the
+default plants). At a constant force that is part of ``d``; but the controller changes ``f_n`` with
+the motion's statics (10 → 19 N within one pivot), and the unmodelled 0.5 mm, confounded with ``c``
+and ``y_o`` as above, biased ``s_h`` and ``s_g`` by 2–3 mm on a closed-loop recording of the paper
+triangle. ``k`` is a sixth state (prior ``normal_compliance_std``, kept on a reset like ``c``):
+eq. 15 reads ``r_h·ê_n = −d + k (f_n − f_ref) + r_o·ê_n``, linear in ``k``, so ``d`` is the distance
+at the reference force ``f_ref`` (the controller's nominal 10 N, where it is known without ``k``).
+
+Both projections are linear in the positions, so one recursive least-squares (Kalman) estimate
+with covariance ``P`` covers every case of the paper. What the contact modes allow to change is
+*released* (its row and column of ``P`` cleared, its variance set to ``prior_std²``) before the
+measurement update:
 
 =================================  ==========================================================
 ground sticks, hand flush          eq. 15 (and eq. 16 if the hand sticks, so ``s_h`` is constant)
@@ -32,8 +61,11 @@ anything else (indeterminate)      reset
 Using eq. 16 while the hand sticks (the paper regresses eq. 15 alone) conditions the regression far
 better: for a rigid rotation about the ground contact sampled every 0.5° with 0.3 mm of noise, the
 standard deviation of ``d`` and ``y_o`` after 20° of rotation drops from ~9 mm to ~0.4 mm.
-``θ_o = θ_h`` while flush. Estimates are *valid* when their posterior standard deviation (with the
-assumed ``position_noise``) is at most ``valid_std``.
+``θ_o = θ_h − ĉ τ`` while flush. ``d`` is reported in the object's frame (the constant distance of
+the face from ``r_o``), ``s_h`` in the hand's, ``(r_o − r_h)·e_t(θ_h)`` (it differs from the
+object-frame one by ``d δ``). Estimates are *valid* when their posterior standard deviation (with
+the assumed ``position_noise``) is at most ``valid_std``; before that their means are reported as
+*rough* values while their standard deviation is at most ``rough_std``.
 
 Innovation gate: a contact the modes call sticking that really moved shows up as an innovation the
 noise cannot explain (``gate`` predicted standard deviations), tested on every sample. An eq. 16
@@ -47,7 +79,10 @@ not act on, see :func:`ccopt.estimation.estimator.kinematic_modes`), an unexplai
 ground's. The classifier is conservative (sliding is almost never reported sticking), so a
 sticking-hand report is the reliable one. The rigid update costs little when the ground did not
 move (``r_o`` is re-anchored to within the pose noise); the slip it catches would otherwise be read
-as a hand slide, leaving ``s_h`` and ``s_g`` wrong by the slip.
+as a hand slide, leaving ``s_h`` and ``s_g`` wrong by the slip. A hand the controller keeps sticking
+but the classifier reports sliding (``hand_may_slide``: the modes given are the command's, see
+:func:`ccopt.estimation.estimator.commanded_modes`) is regressed as sticking with the tighter
+``hand_slip_gate`` on eq. 16, which catches a creeping slide sooner.
 """
 
 from __future__ import annotations
@@ -62,11 +97,17 @@ from ccopt import geometry
 from ccopt.estimation.quantile import check_count, check_number
 from ccopt.modes import ContactConfiguration, ContactMode, HandGeometry
 
-D, X_O, Y_O, S_H = range(4)
-"""Indices of the estimated state ``(d, x_o, y_o, s_h)``."""
+D, X_O, Y_O, S_H, C, K = range(6)
+"""Indices of the estimated state ``(d, x_o, y_o, s_h, c, k)`` (m, m, m, m, rad/(N·m), m/N)."""
+_SIZE = 6
 _CONTACT = (D, X_O, Y_O)
-_Prediction = tuple[tuple[float, float, float, float], float, float]
+_POSITIONS = (D, X_O, Y_O, S_H)
+_Row = tuple[float, float, float, float, float, float]
+_Prediction = tuple[_Row, float, float]
 """``(P hᵀ, innovation, innovation variance)`` of one scalar measurement."""
+_Frame = tuple[float, float, float, float, float, float]
+"""The estimated object frame of one sample and its wrench: ``(ê_n, ê_t, τ, f_n − f_ref)`` flattened
+(world, N·m, N)."""
 _PIVOT_ITERATIONS = 8
 
 
@@ -75,11 +116,26 @@ class KinematicsParams:
     """Parameters of the kinematic estimator.
 
     Attributes:
-        excitation_angle: hand rotation between two regression samples (rad).
+        excitation_angle: hand rotation between two regression samples (rad). The sample *after*
+            the one that crossed it is used: the crossing one is selected by its own angle noise
+            (biased along the motion, so along ``τ``), which on a plant recording biased ``c`` by
+            a factor 2.5 and ``θ_o`` by up to 0.4°.
         position_noise: assumed standard deviation of each measured coordinate of ``r_h`` (m),
             including the effect of the angle noise.
-        prior_std: standard deviation of an unknown before any data (m).
+        prior_std: standard deviation of an unknown position before any data (m).
+        compliance_prior: the contact's rotational compliance ``c`` before any data (rad/(N·m));
+            0 (a rigid contact) unless known, e.g. from an earlier run's estimate.
+        compliance_std: its standard deviation before any data (rad/(N·m)).
+        normal_compliance_prior: the contacts' normal compliance ``k`` before any data (m/N): how far
+            the hand face sinks towards the ground contact per newton of normal force (both contacts'
+            penetration; 0.06 mm/N on the default plants).
+        normal_compliance_std: its standard deviation before any data (m/N).
+        reference_force: the normal force at which ``d`` is reported (N): the face sits at
+            ``d − k (f_n − reference_force)``. Near the forces the controller holds, so that ``d``
+            stays known while ``f_n`` does not vary and ``k`` cannot be told from it.
         valid_std: estimates are valid once their standard deviation is at most this (m).
+        rough_std: means are reported (rough, not yet valid) once their standard deviation is at
+            most this (m).
         gate: an eq. 15 innovation beyond this many predicted standard deviations is rejected; an
             eq. 16 one means the hand slid.
         slip_gate: with the ground reported sliding, an eq. 15 (or, with the hand sticking, an
@@ -89,24 +145,41 @@ class KinematicsParams:
             on a plant recording 3 let the first slide each way run 1.6–2.0 mm before it was
             caught, 2 about 1 mm.
         slip_samples: this many rejected eq. 15 samples in a row reset the estimate.
+        hand_slip_gate: with the hand reported sliding but commanded (so assumed) sticking, an
+            eq. 16 innovation beyond this many predicted standard deviations means it slid (a
+            slow creep would pass the ``gate``).
     """
 
-    excitation_angle: float = math.radians(0.5)
+    excitation_angle: float = math.radians(0.25)
     position_noise: float = 5e-4
     prior_std: float = 1.0
+    compliance_prior: float = 0.0
+    compliance_std: float = 0.1
+    normal_compliance_prior: float = 0.0
+    normal_compliance_std: float = 1e-4
+    reference_force: float = 10.0
     valid_std: float = 3e-3
+    rough_std: float = 0.05
     gate: float = 6.0
     slip_gate: float = 2.0
     slip_samples: int = 3
+    hand_slip_gate: float = 4.0
 
     def __post_init__(self) -> None:
         check_number("excitation_angle", self.excitation_angle, low_open=False)
         check_number("position_noise", self.position_noise)
         check_number("prior_std", self.prior_std)
+        check_number("compliance_prior", self.compliance_prior, low=-math.inf)
+        check_number("compliance_std", self.compliance_std, low_open=False)
+        check_number("normal_compliance_prior", self.normal_compliance_prior, low=-math.inf)
+        check_number("normal_compliance_std", self.normal_compliance_std, low_open=False)
+        check_number("reference_force", self.reference_force, low_open=False)
         check_number("valid_std", self.valid_std)
+        check_number("rough_std", self.rough_std, low=self.valid_std, low_open=False)
         check_number("gate", self.gate)
         check_number("slip_gate", self.slip_gate)
         check_count("slip_samples", self.slip_samples)
+        check_number("hand_slip_gate", self.hand_slip_gate)
 
 
 @dataclass(frozen=True)
@@ -115,13 +188,27 @@ class KinematicEstimate:
 
     Attributes:
         theta_o: orientation of the object face touching the hand (rad).
-        s_h: hand sliding position ``(r_o − r_h)·e_t`` (m; its flush-hand equivalent while pivoting).
-        s_g: ground sliding position ``x_o`` (m).
-        d: distance from the ground contact to the object face touching the hand (m).
-        r_o: ground contact ``(x_o, y_o)`` (m).
-        std: posterior standard deviations of ``(d, x_o, y_o, s_h)`` (m).
+        s_h: hand sliding position ``(r_o − r_h)·e_t(θ_h)`` (m; its flush-hand equivalent while
+            pivoting); NaN unless ``s_h_valid``.
+        s_g: ground sliding position ``x_o`` (m); NaN unless ``contact_valid``.
+        d: distance from the ground contact to the object face touching the hand (m); NaN unless
+            ``contact_valid``.
+        r_o: ground contact ``(x_o, y_o)`` (m); NaN unless ``contact_valid``.
+        std: posterior standard deviations of ``(d, x_o, y_o, s_h)`` (m; ``s_h`` in the hand frame).
         theta_o_valid, s_h_valid: whether ``theta_o`` and ``s_h`` are estimated.
         contact_valid: whether ``d``, ``r_o`` and ``s_g`` are estimated.
+        rough: the means of ``(d, x_o, y_o, s_h)`` (m), each NaN while its standard deviation
+            exceeds ``rough_std`` (``s_h`` also while it is undefined, out of contact).
+        theta_std: standard deviation of ``theta_o`` from the compliance (flush) or from the
+            contact (pivoting), rad; the angle noise is not included. NaN unless ``theta_o_valid``.
+        compliance: the estimated compliance ``c`` of the hand contact, rad/(N·m).
+        compliance_std: its standard deviation, rad/(N·m).
+        normal_compliance: the estimated normal compliance ``k`` of the contacts, m/N.
+        resets: how many times the estimate was reset (:meth:`KinematicEstimator.reset`).
+        anchor: changes whenever the ground contact ``r_o`` may have moved (a reset, a ground
+            slide followed); samples with the same ``anchor`` share one ``r_o``.
+        ground_fixed: whether this sample was regressed with ``r_o`` fixed (ground sticking,
+            hand flush, no slip seen).
     """
 
     theta_o: float
@@ -133,12 +220,21 @@ class KinematicEstimate:
     theta_o_valid: bool
     s_h_valid: bool
     contact_valid: bool
+    rough: tuple[float, float, float, float] = (math.nan,) * 4
+    theta_std: float = math.nan
+    compliance: float = math.nan
+    compliance_std: float = math.nan
+    normal_compliance: float = math.nan
+    resets: int = 0
+    anchor: int = 0
+    ground_fixed: bool = False
 
 
 class KinematicEstimator:
-    """Mode-switched recursive least squares on paper eqs. 14–16 (see the module docstring).
+    """Mode-switched extended Kalman filter on paper eqs. 14–16 with the contact compliance (see the
+    module docstring).
 
-    The state (4) and covariance (4×4) are plain Python lists: at this size that is several times
+    The state (6) and covariance (6×6) are plain Python lists: at this size that is several times
     faster than NumPy.
     """
 
@@ -151,18 +247,30 @@ class KinematicEstimator:
         self._prior_variance = self.params.prior_std**2
         self._gate_squared = self.params.gate**2
         self._slip_gate_squared = self.params.slip_gate**2
+        self._hand_slip_gate_squared = self.params.hand_slip_gate**2
+        params = self.params
+        self._state = [0.0, 0.0, 0.0, 0.0, params.compliance_prior, params.normal_compliance_prior]
+        self._cov = [[0.0] * _SIZE for _ in range(_SIZE)]
+        self._cov[C][C] = params.compliance_std**2
+        self._cov[K][K] = params.normal_compliance_std**2
+        self.resets = -1
+        """How many times the estimate was reset."""
+        self.anchor = -1
+        """Changes whenever ``r_o`` is released (see :class:`KinematicEstimate`)."""
         self.reset()
 
     def reset(self) -> None:
-        """Forget everything (the motion was indeterminate)."""
-        self._state = [0.0] * 4
-        self._cov = [[self._prior_variance if i == j else 0.0 for j in range(4)] for i in range(4)]
+        """Forget the configuration (the motion was indeterminate); the compliances are kept."""
+        self._state[: S_H + 1] = [0.0] * 4
+        self._release(*_POSITIONS)
         self._last_theta = math.nan  # hand angle at the last eq. 15 sample
-        self._s_h_released = True
+        self._excited = True  # the next sample goes into the regression
         self._theta_o = math.nan
         self._theta_o_valid = False
+        self._theta_std = math.nan
         self._rejected = 0  # eq. 15 samples rejected in a row by the innovation gate
         self._ground_slipping = False  # a ground slip was seen and the ground is still reported sliding
+        self.resets += 1
 
     def update(
         self,
@@ -172,80 +280,106 @@ class KinematicEstimator:
         modes: ContactConfiguration,
         in_contact: bool,
         ground_may_slide: bool = False,
+        torque: float = 0.0,
+        hand_may_slide: bool = False,
+        normal_force: float | None = None,
     ) -> KinematicEstimate:
         """Advance with one measured hand pose ``(x_h, y_h, θ_h)`` (world, m/rad).
 
         ``e_n``, ``e_t`` are the hand frame's axes at ``θ_h`` (:func:`ccopt.geometry.hand_normal`,
         :func:`ccopt.geometry.hand_tangent`), ``modes`` the configuration to work under,
         ``in_contact`` whether the hand touches the object, ``ground_may_slide`` whether the ground
-        was reported sliding although ``modes`` says it sticks (see the module docstring).
+        was reported sliding although ``modes`` says it sticks (see the module docstring), ``torque``
+        the measured ``τ`` (N·m) that tilts a flush hand against the object, ``hand_may_slide``
+        whether the hand was reported sliding although ``modes`` says it sticks (its eq. 16 gate is
+        then ``hand_slip_gate``), ``normal_force`` the measured ``f_n`` (N) that presses the contacts
+        in (None: ``reference_force``).
         """
-        pose, normal, tangent = hand_pose.tolist(), list(e_n), list(e_t)
+        pose = hand_pose.tolist()
         flush = modes.hand_geometry == HandGeometry.FLUSH
         ground_sticks = modes.ground_mode == ContactMode.STICK
         hand_sticks = modes.hand_mode == ContactMode.STICK
+        force = 0.0 if normal_force is None else normal_force - self.params.reference_force
+        frame = self._object_frame(e_n, e_t, torque, force)
         self._ground_slipping = self._ground_slipping and ground_may_slide
-        pivot_ok = True
+        pivot_ok, fixed = True, False
         if not in_contact:
             self._release(S_H)
         elif ground_sticks and flush:
-            if ground_may_slide and self._ground_slid(pose, normal, tangent, hand_sticks):
-                self._follow_ground(pose, normal, tangent, hand_sticks)
+            if ground_may_slide and self._ground_slid(pose, frame, hand_sticks):
+                self._follow_ground(pose, frame, hand_sticks)
             else:
-                self._regress(pose, normal, tangent, hand_sticks)
-            self._theta_o, self._theta_o_valid = pose[2], True
+                self._regress(pose, frame, hand_sticks, hand_may_slide)
+                fixed = True
+            self._flush_angle(pose[2], torque)
         elif ground_sticks:
             pivot_ok = self._pivot(hand_pose, int(modes.hand_geometry))
         elif flush and hand_sticks:
-            self._follow_ground(pose, normal, tangent, hand_sticks=True)
-            self._theta_o, self._theta_o_valid = pose[2], True
+            self._follow_ground(pose, frame, hand_sticks=True)
+            self._flush_angle(pose[2], torque)
         else:
             self.reset()
             if flush:
-                self._theta_o, self._theta_o_valid = pose[2], True
-        return self._estimate(in_contact and pivot_ok)
+                self._flush_angle(pose[2], torque)
+        return self._estimate(in_contact and pivot_ok, torque if flush else 0.0, fixed)
 
-    def _regress(
-        self, pose: list[float], normal: list[float], tangent: list[float], hand_sticks: bool
-    ) -> None:
+    def _object_frame(
+        self, e_n: Sequence[float], e_t: Sequence[float], torque: float, force: float
+    ) -> _Frame:
+        """``(ê_n, ê_t, τ, f_n − f_ref)``: the hand axes turned by ``−ĉ τ`` to the object face's."""
+        tilt = self._state[C] * torque
+        cos, sin = math.cos(tilt), math.sin(tilt)
+        return (
+            e_n[0] * cos - e_t[0] * sin,
+            e_n[1] * cos - e_t[1] * sin,
+            e_t[0] * cos + e_n[0] * sin,
+            e_t[1] * cos + e_n[1] * sin,
+            torque,
+            force,
+        )
+
+    def _flush_angle(self, theta_h: float, torque: float) -> None:
+        """``θ_o = θ_h − ĉ τ`` and its standard deviation from ``c``'s."""
+        self._theta_o = theta_h - self._state[C] * torque
+        self._theta_std = abs(torque) * math.sqrt(self._cov[C][C])
+        self._theta_o_valid = True
+
+    def _regress(self, pose: list[float], frame: _Frame, hand_sticks: bool, hand_may_slide: bool) -> None:
         """Ground sticking, hand flush: eq. 15 on excitation; eq. 16 tracks ``s_h`` (see the docstring)."""
+        excited = self._excited
+        if excited:
+            self._measure_normal(pose, frame)
         last = self._last_theta
-        excited = (
+        self._excited = (
             math.isnan(last) or abs(math.remainder(pose[2] - last, math.tau)) >= self.params.excitation_angle
         )
-        if excited:
-            self._measure_normal(pose, normal)
-        row, value = _tangent_row(pose, tangent)
+        row, value = self._tangent_row(pose, frame)
         prediction = self._predict(row, value)
-        if not hand_sticks or self._s_h_released or not self._consistent(prediction):
+        gate = self._hand_slip_gate_squared if hand_may_slide else self._gate_squared
+        if not hand_sticks or self._s_h_released or not self._within(prediction, gate):
             self._release(S_H)  # reported sliding, unknown, or slid although reported sticking
             self._scalar_update(row, value)
             self._s_h_released = False
         elif excited:
             self._apply(prediction)
 
-    def _ground_slid(
-        self, pose: list[float], normal: list[float], tangent: list[float], hand_sticks: bool
-    ) -> bool:
+    def _ground_slid(self, pose: list[float], frame: _Frame, hand_sticks: bool) -> bool:
         """Whether the ground slid since it was first reported sliding: latched, or now an innovation
         beyond ``slip_gate`` of eq. 15, or of eq. 16 if the hand sticks (else the hand explains it)."""
         if not self._ground_slipping:
-            self._ground_slipping = self._beyond_slip_gate(*_normal_row(pose, normal)) or (
+            self._ground_slipping = self._beyond_slip_gate(*self._normal_row(pose, frame)) or (
                 hand_sticks
                 and not self._s_h_released
-                and self._beyond_slip_gate(*_tangent_row(pose, tangent))
+                and self._beyond_slip_gate(*self._tangent_row(pose, frame))
             )
             if self._ground_slipping:
                 self._rejected = 0
         return self._ground_slipping
 
-    def _beyond_slip_gate(self, row: tuple[float, float, float, float], value: float) -> bool:
-        _, innovation, variance = self._predict(row, value)
-        return innovation * innovation > self._slip_gate_squared * variance
+    def _beyond_slip_gate(self, row: _Row, value: float) -> bool:
+        return not self._within(self._predict(row, value), self._slip_gate_squared)
 
-    def _follow_ground(
-        self, pose: list[float], normal: list[float], tangent: list[float], hand_sticks: bool
-    ) -> None:
+    def _follow_ground(self, pose: list[float], frame: _Frame, hand_sticks: bool) -> None:
         """Ground sliding, hand flush: ``r_o`` follows the hand rigidly (hand sticking, the paper's
         case), or, with the hand sliding too, ``x_o`` and ``s_h`` both change (the object keeps its
         height on a flat ground) and eqs. 15–16 give both."""
@@ -253,7 +387,9 @@ class KinematicEstimator:
             self._release(X_O, Y_O)
         else:
             self._release(X_O, S_H)
-        self._measure(pose, normal, tangent)
+        self._measure_normal(pose, frame)
+        self._scalar_update(*self._tangent_row(pose, frame))
+        self._s_h_released = False
 
     def _pivot(self, hand_pose: np.ndarray, sign: int) -> bool:
         """Ground sticking, hand pivoting about its ``sign`` end: ``θ_o`` and ``s_h`` from geometry."""
@@ -268,7 +404,9 @@ class KinematicEstimator:
             self._theta_o_valid = False
             return False
         self._theta_o, self._state[S_H] = solution
-        self._cov[S_H][S_H] = max(self._cov[index][index] for index in _CONTACT)  # inherits their accuracy
+        contact_variance = max(self._cov[index][index] for index in _CONTACT)
+        self._cov[S_H][S_H] = contact_variance  # inherits their accuracy
+        self._theta_std = math.sqrt(contact_variance) / max(float(np.hypot(*(r_o - hand_pose[:2]))), 1e-3)
         self._theta_o_valid = True
         return True
 
@@ -276,22 +414,18 @@ class KinematicEstimator:
         """Forget what is known about the given state components (they may have changed)."""
         cov = self._cov
         for index in indices:
-            for other in range(4):
+            for other in range(_SIZE):
                 cov[index][other] = cov[other][index] = 0.0
             cov[index][index] = self._prior_variance
         if S_H in indices:
             self._s_h_released = True
+        if X_O in indices:
+            self.anchor += 1
 
-    def _measure(self, pose: list[float], normal: list[float], tangent: list[float]) -> None:
-        """Kalman update with eq. 15 (gated, :meth:`_measure_normal`), then eq. 16."""
-        self._measure_normal(pose, normal)
-        self._scalar_update(*_tangent_row(pose, tangent))
-        self._s_h_released = False
-
-    def _measure_normal(self, pose: list[float], normal: list[float]) -> None:
+    def _measure_normal(self, pose: list[float], frame: _Frame) -> None:
         """Eq. 15 through the innovation gate; ``slip_samples`` rejections in a row reset the estimate."""
-        prediction = self._predict(*_normal_row(pose, normal))
-        if not self._consistent(prediction):
+        prediction = self._predict(*self._normal_row(pose, frame))
+        if not self._within(prediction, self._gate_squared):
             self._rejected += 1
             if self._rejected >= self.params.slip_samples:
                 self.reset()
@@ -300,69 +434,125 @@ class KinematicEstimator:
         self._apply(prediction)
         self._last_theta = pose[2]
 
-    def _consistent(self, prediction: _Prediction) -> bool:
-        """Whether the innovation is within ``gate`` predicted standard deviations."""
-        _, innovation, variance = prediction
-        return innovation * innovation <= self._gate_squared * variance
+    def _normal_row(self, pose: list[float], frame: _Frame) -> tuple[_Row, float]:
+        """Eq. 15 on the object frame, linearised in ``c``: ``row · x = value`` with
+        ``r_h·ê_n = −d + k (f_n − f_ref) + r_o·ê_n`` at ``ĉ`` and ``∂/∂c = −s_h τ``."""
+        slope = -self._state[S_H] * frame[4]
+        value = pose[0] * frame[0] + pose[1] * frame[1] + slope * self._state[C]
+        return (-1.0, frame[0], frame[1], 0.0, slope, frame[5]), value
 
-    def _predict(self, row: tuple[float, float, float, float], value: float) -> _Prediction:
+    def _tangent_row(self, pose: list[float], frame: _Frame) -> tuple[_Row, float]:
+        """Eq. 16 on the object frame, linearised in ``c``: ``row · x = value`` with
+        ``r_h·ê_t = r_o·ê_t − s_h`` at ``ĉ`` and ``∂/∂c = d τ``."""
+        slope = self._state[D] * frame[4]
+        value = pose[0] * frame[2] + pose[1] * frame[3] + slope * self._state[C]
+        return (0.0, frame[2], frame[3], -1.0, slope, 0.0), value
+
+    @staticmethod
+    def _within(prediction: _Prediction, gate_squared: float) -> bool:
+        """Whether the innovation is within ``√gate_squared`` predicted standard deviations."""
+        _, innovation, variance = prediction
+        return innovation * innovation <= gate_squared * variance
+
+    def _predict(self, row: _Row, value: float) -> _Prediction:
         """``(P hᵀ, innovation, innovation variance)`` of one measurement ``row · x = value``."""
-        h0, h1, h2, h3 = row
-        state = self._state
-        c0, c1, c2, c3 = (r[0] * h0 + r[1] * h1 + r[2] * h2 + r[3] * h3 for r in self._cov)  # P hᵀ
-        variance = c0 * h0 + c1 * h1 + c2 * h2 + c3 * h3 + self._noise_variance
-        innovation = value - (state[0] * h0 + state[1] * h1 + state[2] * h2 + state[3] * h3)
-        return (c0, c1, c2, c3), innovation, variance
+        h0, h1, h2, h3, h4, h5 = row
+        s = self._state
+        r0, r1, r2, r3, r4, r5 = self._cov  # P hᵀ, unrolled (a generator costs more than the sums)
+        c0 = r0[0] * h0 + r0[1] * h1 + r0[2] * h2 + r0[3] * h3 + r0[4] * h4 + r0[5] * h5
+        c1 = r1[0] * h0 + r1[1] * h1 + r1[2] * h2 + r1[3] * h3 + r1[4] * h4 + r1[5] * h5
+        c2 = r2[0] * h0 + r2[1] * h1 + r2[2] * h2 + r2[3] * h3 + r2[4] * h4 + r2[5] * h5
+        c3 = r3[0] * h0 + r3[1] * h1 + r3[2] * h2 + r3[3] * h3 + r3[4] * h4 + r3[5] * h5
+        c4 = r4[0] * h0 + r4[1] * h1 + r4[2] * h2 + r4[3] * h3 + r4[4] * h4 + r4[5] * h5
+        c5 = r5[0] * h0 + r5[1] * h1 + r5[2] * h2 + r5[3] * h3 + r5[4] * h4 + r5[5] * h5
+        variance = c0 * h0 + c1 * h1 + c2 * h2 + c3 * h3 + c4 * h4 + c5 * h5 + self._noise_variance
+        innovation = value - (s[0] * h0 + s[1] * h1 + s[2] * h2 + s[3] * h3 + s[4] * h4 + s[5] * h5)
+        return (c0, c1, c2, c3, c4, c5), innovation, variance
 
     def _apply(self, prediction: _Prediction) -> None:
         """Kalman update with a :meth:`_predict`-ed measurement (noise variance ``position_noise²``)."""
-        (c0, c1, c2, c3), innovation, variance = prediction
+        column, innovation, variance = prediction
+        c0, c1, c2, c3, c4, c5 = column
         scale = 1.0 / variance
         state = self._state
-        for i, (r, c) in enumerate(zip(self._cov, (c0, c1, c2, c3), strict=True)):
+        for i, (r, c) in enumerate(zip(self._cov, column, strict=True)):
             gain = c * scale
             state[i] += gain * innovation
             r[0] -= gain * c0
             r[1] -= gain * c1
             r[2] -= gain * c2
             r[3] -= gain * c3
+            r[4] -= gain * c4
+            r[5] -= gain * c5
 
-    def _scalar_update(self, row: tuple[float, float, float, float], value: float) -> None:
+    def _scalar_update(self, row: _Row, value: float) -> None:
         """Kalman update with one measurement ``row · x = value``, ungated."""
         self._apply(self._predict(row, value))
-
-    def _standard_deviations(self) -> tuple[float, ...]:
-        return tuple(math.sqrt(max(self._cov[i][i], 0.0)) for i in range(4))
 
     def _contact_valid(self) -> bool:
         return max(self._cov[index][index] for index in _CONTACT) <= self.params.valid_std**2
 
-    def _estimate(self, s_h_defined: bool) -> KinematicEstimate:
-        state, std = self._state, self._standard_deviations()
-        contact_valid = max(std[:3]) <= self.params.valid_std
-        s_h_valid = s_h_defined and contact_valid and std[S_H] <= self.params.valid_std
-        nan = math.nan
+    def ground_contact(self) -> tuple[float, float, float, float, float]:
+        """``(x_o, y_o, var x_o, cov(x_o, y_o), var y_o)``: the ground contact and its covariance (m, m²)."""
+        cov = self._cov
+        return self._state[X_O], self._state[Y_O], cov[X_O][X_O], cov[X_O][Y_O], cov[Y_O][Y_O]
+
+    def _hand_frame_s_h(self, torque: float) -> tuple[float, float]:
+        """``s_h`` in the hand frame, ``s cos δ − d sin δ`` with ``δ = ĉ τ``, and its variance
+        (first order in ``(s, d, c)``)."""
+        state, cov = self._state, self._cov
+        s, d = state[S_H], state[D]
+        tilt = state[C] * torque
+        cos, sin = math.cos(tilt), math.sin(tilt)
+        j_s, j_d, j_c = cos, -sin, -torque * (s * sin + d * cos)
+        row_s, row_d, row_c = cov[S_H], cov[D], cov[C]
+        variance = (
+            j_s * (j_s * row_s[S_H] + j_d * row_s[D] + j_c * row_s[C])
+            + j_d * (j_s * row_d[S_H] + j_d * row_d[D] + j_c * row_d[C])
+            + j_c * (j_s * row_c[S_H] + j_d * row_c[D] + j_c * row_c[C])
+        )
+        return s * cos - d * sin, variance
+
+    def _estimate(self, s_h_defined: bool, torque: float, fixed: bool) -> KinematicEstimate:
+        state, cov, params = self._state, self._cov, self.params
+        s_h, s_h_variance = self._hand_frame_s_h(torque)
+        sqrt, nan, rough_std = math.sqrt, math.nan, params.rough_std
+        std = (
+            sqrt(max(cov[D][D], 0.0)),
+            sqrt(max(cov[X_O][X_O], 0.0)),
+            sqrt(max(cov[Y_O][Y_O], 0.0)),
+            sqrt(max(s_h_variance, 0.0)),
+        )
+        d, x_o, y_o = state[D], state[X_O], state[Y_O]
+        if not s_h_defined:
+            s_h = nan
+        rough = (
+            d if std[0] <= rough_std else nan,
+            x_o if std[1] <= rough_std else nan,
+            y_o if std[2] <= rough_std else nan,
+            s_h if std[3] <= rough_std else nan,
+        )
+        contact_valid = max(std[0], std[1], std[2]) <= params.valid_std
+        s_h_valid = s_h_defined and contact_valid and std[3] <= params.valid_std
         return KinematicEstimate(
             theta_o=self._theta_o,
-            s_h=state[S_H] if s_h_valid else nan,
-            s_g=state[X_O] if contact_valid else nan,
-            d=state[D] if contact_valid else nan,
-            r_o=np.array(state[X_O : Y_O + 1] if contact_valid else (nan, nan)),
+            s_h=s_h if s_h_valid else nan,
+            s_g=x_o if contact_valid else nan,
+            d=d if contact_valid else nan,
+            r_o=np.array((x_o, y_o) if contact_valid else (nan, nan)),
             std=std,
             theta_o_valid=self._theta_o_valid,
             s_h_valid=s_h_valid,
             contact_valid=contact_valid,
+            rough=rough,
+            theta_std=self._theta_std if self._theta_o_valid else nan,
+            compliance=state[C],
+            compliance_std=sqrt(max(cov[C][C], 0.0)),
+            normal_compliance=state[K],
+            resets=self.resets,
+            anchor=self.anchor,
+            ground_fixed=fixed,
         )
-
-
-def _normal_row(pose: list[float], normal: list[float]) -> tuple[tuple[float, float, float, float], float]:
-    """Eq. 15 as ``row · (d, x_o, y_o, s_h) = value``: ``r_h·e_n = −d + r_o·e_n``."""
-    return (-1.0, normal[0], normal[1], 0.0), pose[0] * normal[0] + pose[1] * normal[1]
-
-
-def _tangent_row(pose: list[float], tangent: list[float]) -> tuple[tuple[float, float, float, float], float]:
-    """Eq. 16 as ``row · (d, x_o, y_o, s_h) = value``: ``r_h·e_t = r_o·e_t − s_h``."""
-    return (0.0, tangent[0], tangent[1], -1.0), pose[0] * tangent[0] + pose[1] * tangent[1]
 
 
 def pivot_contact(

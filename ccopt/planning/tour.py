@@ -19,11 +19,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ccopt import geometry, statics
+from ccopt.modes import Motion
 from ccopt.objects import PlanarObject
 from ccopt.planning.graph import ConfigurationGraph, Edge, GraphParams, Node
 from ccopt.plant import placement
 from ccopt.plant.base import StartConfig
-from ccopt.schedule import Schedule, Step, hold
+from ccopt.schedule import Schedule, Step, exploration, hold
 
 if TYPE_CHECKING:
     from ccopt.closed_loop import LoopParams
@@ -89,11 +90,6 @@ def possible_tour(
     reach = reachable_nodes(graph, node)
     allowed = allowed_slides(graph, reach)
     edges: list[Edge] = []
-    for sign in (1, -1, -1, 1):  # exploration: the kinematics need the object turned both ways
-        pivot = next((e for e in graph.edges(node) if e.kind == "pivot" and e.delta * sign > 0), None)
-        if pivot is not None:
-            edges.append(pivot)
-            node = pivot.target
     done = {kind: 0 for kind in SLIDE_KINDS}
     way = {kind: 1 for kind in SLIDE_KINDS}
     s_g = 0.0
@@ -127,9 +123,19 @@ def possible_tour(
                 node = pivot.target
                 progressed = True
         stuck = 0 if progressed else stuck + 1
-    schedule = Schedule(name, (hold(0.5), *(_as_step(edge, timeout) for edge in edges), hold(0.5)))
+    explore = exploration() if _explorable(graph) else ()
+    steps = (hold(0.5), *explore, *(_as_step(edge, timeout) for edge in edges), hold(0.5))
+    schedule = Schedule(name, steps)
     counts = {kind: sum(edge.kind == kind for edge in edges) for kind in ("pivot", *SLIDE_KINDS)}
     return Tour(schedule, allowed, counts)
+
+
+def _explorable(graph: ConfigurationGraph) -> bool:
+    """Whether the exploration's pivots (:func:`ccopt.schedule.exploration`) are possible from the
+    start: one pivot each way."""
+    start = Node(0, 0)
+    ways = {int(math.copysign(1, e.delta)) for e in graph.edges(start) if e.kind == "pivot"}
+    return ways == {1, -1}
 
 
 def _route_to_slide(graph: ConfigurationGraph, source: Node, kind: str, sign: int) -> list[Edge] | None:
@@ -170,7 +176,8 @@ def plan_tour(
     obj: PlanarObject,
     params: LoopParams,
     angle_range: tuple[float, float],
-    margin: float = 1.0,
+    margin: float = 2.5,
+    force_share: float = 0.75,
     candidates: int = 7,
     **tour_options: object,
 ) -> tuple[LoopParams, Tour]:
@@ -178,7 +185,10 @@ def plan_tour(
     face (``candidates`` of them, at the run's start tilt), the one whose :func:`possible_tour` holds
     the most slides (up to the number asked for of each kind), with the loop parameters that start
     there. ``angle_range`` is the robot's reach in ``θ_h`` (rad); the object's own vertex range and
-    ``5°`` of clearance narrow it. Uses the true object: never for the estimator or the controller."""
+    ``5°`` of clearance narrow it. Every step (and the start) keeps ``margin`` (N) with a normal force
+    within ``force_share`` of the hand's range and the estimate's torque lever: headroom for what the
+    statics ignore (the contacts' compliance, the dynamics). Uses the true object: never for the
+    estimator or the controller."""
     base = dataclasses.replace(params.start, s_h=0.0)
     low, high = placement.face_s_h_range(obj, base)
     inset = params.hand.half_length + 2e-3
@@ -188,17 +198,23 @@ def plan_tour(
     clearance = math.radians(5.0)
     theta_range = (max(angle_range[0], tilt_low + clearance), min(angle_range[1], tilt_high - clearance))
     wanted = int(tour_options.get("slides", 4))
+    lever = params.estimator_params.friction.torque_margin * params.hand.half_length  # as the run knows it
+    f_min, f_max = params.hand.force_limits
+    forces = (f_min, f_min + force_share * (f_max - f_min))  # headroom for what the model ignores
     best: tuple[int, LoopParams, Tour] | None = None
     for s_h in np.linspace(low + inset, high - inset, candidates):
         start = dataclasses.replace(base, s_h=float(s_h))
         trial = dataclasses.replace(params, start=start, centre_hand=False)
         truth = statics.true_statics(obj, start, params.hand)
         graph_params = GraphParams(s_h_range=truth.s_h_range, theta_range=theta_range, min_margin=margin)
-        hand = params.hand
         where = (truth.theta_o, truth.s_h)
-        graph = ConfigurationGraph(truth.statics, where, hand.half_length, hand.force_limits, graph_params)
+        graph = ConfigurationGraph(truth.statics, where, lever, forces, graph_params)
+        if graph.margin(Node(0, 0), Motion.HOLD) < margin:
+            continue  # the run could not even hold its start comfortably
         tour = possible_tour(graph, **tour_options)
         score = sum(min(tour.counts[kind], wanted) for kind in SLIDE_KINDS)
         if best is None or score > best[0]:
             best = (score, trial, tour)
+    if best is None:
+        raise ValueError(f"{obj.name} cannot be held with a margin of {margin} N anywhere on its face")
     return best[1], best[2]

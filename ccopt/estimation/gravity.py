@@ -1,0 +1,279 @@
+"""The weight's moment about the ground contact, ``M(θ_o) = a cos θ_o + b sin θ_o`` (docs/architecture.md §7).
+
+``M`` is the moment (N·m, CCW) of the unknown weight about the ground contact ``r_o``; the statics
+need it (:class:`ccopt.statics.GravityMoment` with ``a``, ``b`` its cos and sin coefficients). With
+the hand in contact, the object in quasi-static equilibrium and the ground contact a point (its
+force passes through ``r_o``), moment balance about ``r_o`` gives, per sample,
+
+    M(θ_o) = −τ − (r_h − r_o) × f        (= −(τ + s_h f_n − d f_t) while the hand is flush),
+
+with ``f`` the hand force in world axes, ``τ`` the measured torque about the hand face centre
+``r_h`` (measured) and ``×`` the planar cross product. Only ``r_o`` of the kinematics enters, and
+linearly: ``M_i = m_i + x_o f_y,i − y_o f_x,i`` with ``m_i = −τ_i − r_h,i × f_i``. So the
+least-squares ``(a, b)`` over the samples of one *segment* (one ground contact position) is
+
+    (a, b) = S (η₀ + (u + x_o g_y − y_o g_x)/σ²),    S = (Λ₀ + A/σ²)⁻¹,
+
+from the sums ``A = Σ φφᵀ``, ``u = Σ φ m``, ``g_x = Σ φ f_x``, ``g_y = Σ φ f_y`` with
+``φ = (cos θ_o, sin θ_o)``, evaluated with the *current* ``r̂_o``: a sample does not keep the error
+of the ``r̂_o`` of its time, so samples are summed from the first flush, sticking one on and the
+estimate improves as ``r̂_o`` does. ``(Λ₀, η₀)`` (information form) carry earlier segments: a ground
+slide moves ``r_o`` but not the centre of mass relative to it, so a segment that ends is folded in
+as a Gaussian prior; a reset of the kinematics (the object may rest on another vertex) forgets all.
+
+Covariance of ``(a, b)``: ``S`` (white noise, ``moment_noise`` per sample, from the force, torque
+and pose noise) ``+ S G Σ_ro Gᵀ S / σ⁴`` (the current ``r̂_o`` uncertainty, common to every sample of
+the segment, ``G = [g_y, −g_x]``) ``+ β² S k kᵀ S / σ⁴`` (a constant moment bias ``β =
+moment_bias``, e.g. the force/torque sensor's, common to every sample, ``k = Σ φ``). The estimate
+is *valid* when the kinematics are and the standard deviation of ``M̂`` at the current ``θ_o`` is at
+most ``valid_std``; the covariance gives ``M̂`` and its uncertainty at any ``θ``
+(:meth:`GravityEstimate.moment`, :meth:`GravityEstimate.moment_std`), which grows away from the
+angles visited.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ccopt.estimation.kinematics import KinematicEstimate
+from ccopt.estimation.quantile import check_number
+
+_GroundContact = tuple[float, float, float, float, float]
+"""``(x_o, y_o, var x_o, cov(x_o, y_o), var y_o)`` (m, m²)."""
+
+
+@dataclass(frozen=True)
+class GravityParams:
+    """Parameters of :class:`GravityEstimator`.
+
+    Attributes:
+        moment_noise: standard deviation of one sample's moment ``−τ − (r_h − r_o) × f`` (N·m):
+            the torque noise, the force noise times the lever ``|r_h − r_o|`` and the position
+            noise times ``|f|`` (0.005 N·m, 0.3 N × 0.1 m, 15 N × 0.2 mm ≈ 0.03 N·m).
+        moment_bias: standard deviation of a moment error common to every sample (N·m), e.g. the
+            sensor bias (0.002 N·m of torque, 0.1 N of force at 6 cm).
+        prior_std: standard deviation of ``a`` and ``b`` before any data (N·m).
+        valid_std: the estimate is valid once the standard deviation of ``M̂(θ_o)`` is at most
+            this (N·m).
+    """
+
+    moment_noise: float = 0.04
+    moment_bias: float = 0.005
+    prior_std: float = 1.0
+    valid_std: float = 0.02
+
+    def __post_init__(self) -> None:
+        check_number("moment_noise", self.moment_noise)
+        check_number("moment_bias", self.moment_bias, low_open=False)
+        check_number("prior_std", self.prior_std)
+        check_number("valid_std", self.valid_std)
+
+
+class GravityEstimate:
+    """``M(θ) = a cos θ + b sin θ``, the weight's moment about the ground contact (N·m, CCW).
+
+    Immutable. The least squares are solved when the estimate is first read (about 2 µs), not at
+    every sample: a sample only copies the sums.
+
+    Attributes:
+        a, b: the cos and sin coefficients (N·m; :class:`ccopt.statics.GravityMoment`); NaN while
+            the ground contact is unknown.
+        covariance: ``(var a, cov(a, b), var b)`` (N²·m²).
+        valid: whether ``M̂`` at the ``θ_o`` of its sample is known within ``valid_std`` and the
+            kinematics are valid.
+    """
+
+    __slots__ = ("_problem", "_solution")
+
+    def __init__(self, problem: _Problem | None = None) -> None:
+        self._problem = problem
+        self._solution: _Solution | None = None if problem is not None else _UNKNOWN_SOLUTION
+
+    @property
+    def a(self) -> float:
+        return self._solved()[0]
+
+    @property
+    def b(self) -> float:
+        return self._solved()[1]
+
+    @property
+    def covariance(self) -> tuple[float, float, float]:
+        return self._solved()[2]
+
+    @property
+    def valid(self) -> bool:
+        return self._solved()[3]
+
+    def moment(self, theta: float) -> float:
+        """``M̂(θ)`` (N·m) at face angle ``θ`` (rad)."""
+        a, b, _, _ = self._solved()
+        return a * math.cos(theta) + b * math.sin(theta)
+
+    def moment_std(self, theta: float) -> float:
+        """The standard deviation of ``M̂(θ)`` (N·m) at face angle ``θ`` (rad)."""
+        return math.sqrt(_quadratic(self._solved()[2], math.cos(theta), math.sin(theta)))
+
+    def __repr__(self) -> str:
+        a, b, covariance, valid = self._solved()
+        return f"GravityEstimate(a={a!r}, b={b!r}, covariance={covariance!r}, valid={valid!r})"
+
+    def _solved(self) -> _Solution:
+        if self._solution is None:
+            self._solution = _solve_problem(*self._problem)
+        return self._solution
+
+
+_Solution = tuple[float, float, tuple[float, float, float], bool]
+"""``(a, b, covariance, valid)``."""
+_UNKNOWN_SOLUTION: _Solution = (math.nan, math.nan, (math.nan,) * 3, False)
+UNKNOWN = GravityEstimate()
+"""The estimate before any usable sample."""
+
+
+_Problem = tuple[tuple[float, ...], tuple[float, ...], _GroundContact, float, bool, "GravityParams"]
+"""One estimate's least squares: the sums and prior (:class:`GravityEstimator`), the ground contact,
+the sample's ``θ_o``, whether the kinematics are valid, and the parameters (a plain tuple: one is
+made per sample)."""
+
+
+class GravityEstimator:
+    """Least squares of ``(a, b)`` with the ground contact applied last (see the module docstring).
+
+    Plain floats: a sample costs about a microsecond.
+    """
+
+    def __init__(self, params: GravityParams | None = None) -> None:
+        self.params = params if params is not None else GravityParams()
+        self._epoch = (0, 0)  # the kinematics' (resets, anchor) of the current segment
+        self._contact: _GroundContact = (0.0,) * 5  # its last ground contact estimate
+        self.reset()
+
+    def update(
+        self,
+        theta_o: float,
+        hand_pose: list[float],
+        hand_wrench: list[float],
+        kinematics: KinematicEstimate,
+        contact: _GroundContact,
+    ) -> GravityEstimate:
+        """One sample (see :meth:`add`), used if the kinematics regressed it on a fixed ground
+        contact; ``contact`` is their ground contact estimate. A reset of the kinematics forgets
+        everything; a move of the ground contact (a new ``anchor``) ends the segment."""
+        epoch = (kinematics.resets, kinematics.anchor)
+        if epoch[0] != self._epoch[0]:
+            self.reset()
+        elif epoch[1] != self._epoch[1]:
+            self.end_segment(self._contact)
+        self._epoch, self._contact = epoch, contact
+        if kinematics.ground_fixed and math.isfinite(theta_o):
+            self.add(theta_o, hand_pose, hand_wrench)
+        known = math.isfinite(kinematics.rough[1]) and math.isfinite(kinematics.rough[2])  # r_o
+        return self.estimate(theta_o, contact if known else None, kinematics.contact_valid)
+
+    def reset(self) -> None:
+        """Forget everything (the object may rest on another vertex)."""
+        info = 1.0 / self.params.prior_std**2
+        self._prior = (info, 0.0, info, 0.0, 0.0)  # Λ₀ (upper triangle), η₀
+        self._informed = False
+        self._clear_segment()
+
+    def end_segment(self, contact: _GroundContact) -> None:
+        """The ground contact moves (a ground slide): fold this segment, with ``contact`` the last
+        estimate of its ground contact, into the prior."""
+        if self._samples:
+            (a, b), (paa, pab, pbb) = _solve(tuple(self._sums), self._prior, contact, self.params)
+            det = paa * pbb - pab * pab
+            laa, lab, lbb = pbb / det, -pab / det, paa / det
+            self._prior = (laa, lab, lbb, laa * a + lab * b, lab * a + lbb * b)
+        self._clear_segment()
+
+    def add(self, theta_o: float, hand_pose: list[float], hand_wrench: list[float]) -> None:
+        """One sample: face angle ``θ_o`` (rad), measured ``(x_h, y_h, θ_h)`` (world, m/rad) and
+        ``(f_n, f_t, τ)`` (hand frame, N/N·m), the object in equilibrium on a fixed ground contact."""
+        x_h, y_h, theta_h = hand_pose
+        f_n, f_t, torque = hand_wrench
+        sin_h, cos_h = math.sin(theta_h), math.cos(theta_h)
+        f_x, f_y = f_n * sin_h + f_t * cos_h, -f_n * cos_h + f_t * sin_h  # f_n e_n + f_t e_t
+        moment = -torque - (x_h * f_y - y_h * f_x)
+        c, s = math.cos(theta_o), math.sin(theta_o)
+        sums = self._sums
+        sums[0] += c * c
+        sums[1] += c * s
+        sums[2] += s * s
+        sums[3] += c * moment
+        sums[4] += s * moment
+        sums[5] += c * f_x
+        sums[6] += s * f_x
+        sums[7] += c * f_y
+        sums[8] += s * f_y
+        sums[9] += c
+        sums[10] += s
+        self._samples += 1
+        self._informed = True
+
+    def estimate(
+        self, theta_o: float, contact: _GroundContact | None, kinematics_valid: bool
+    ) -> GravityEstimate:
+        """The estimate with ``contact`` the current ground contact estimate (None: unknown)."""
+        if contact is None or not self._informed:
+            return UNKNOWN
+        return GravityEstimate(
+            (tuple(self._sums), self._prior, contact, theta_o, kinematics_valid, self.params)
+        )
+
+    def _clear_segment(self) -> None:
+        self._sums = [0.0] * 11  # Σ φφᵀ (3), Σ φ m (2), Σ φ f_x (2), Σ φ f_y (2), Σ φ (2)
+        self._samples = 0
+
+
+def _solve_problem(
+    sums: tuple[float, ...],
+    prior: tuple[float, ...],
+    contact: _GroundContact,
+    theta_o: float,
+    kinematics_valid: bool,
+    params: GravityParams,
+) -> _Solution:
+    """``(a, b, covariance, valid)`` of one :data:`_Problem`."""
+    (a, b), covariance = _solve(sums, prior, contact, params)
+    valid = kinematics_valid and math.isfinite(theta_o)
+    if valid:
+        valid = _quadratic(covariance, math.cos(theta_o), math.sin(theta_o)) <= params.valid_std**2
+    return a, b, covariance, valid
+
+
+def _solve(
+    sums: tuple[float, ...],
+    prior: tuple[float, ...],
+    contact: _GroundContact,
+    params: GravityParams,
+) -> tuple[tuple[float, float], tuple[float, float, float]]:
+    """``((a, b), (var a, cov, var b))`` of the sums and prior with the ground contact
+    ``(x_o, y_o, Σ_ro)``."""
+    x_o, y_o, vxx, vxy, vyy = contact
+    w = 1.0 / params.moment_noise**2
+    aa, ab, bb, mc, ms, xc, xs, yc, ys, kc, ks = sums
+    laa, lab, lbb, ea, eb = prior
+    laa, lab, lbb = laa + w * aa, lab + w * ab, lbb + w * bb
+    det = laa * lbb - lab * lab
+    saa, sab, sbb = lbb / det, -lab / det, laa / det  # S = Λ⁻¹
+    ra = ea + w * (mc + x_o * yc - y_o * xc)
+    rb = eb + w * (ms + x_o * ys - y_o * xs)
+    a, b = saa * ra + sab * rb, sab * ra + sbb * rb
+    # sensitivities of (a, b) to x_o, y_o and to a common moment bias: S G w, S k w
+    gxa, gxb = w * (saa * yc + sab * ys), w * (sab * yc + sbb * ys)
+    gya, gyb = -w * (saa * xc + sab * xs), -w * (sab * xc + sbb * xs)
+    ka, kb = w * (saa * kc + sab * ks), w * (sab * kc + sbb * ks)
+    bias = params.moment_bias**2
+    paa = saa + gxa * gxa * vxx + 2.0 * gxa * gya * vxy + gya * gya * vyy + bias * ka * ka
+    pbb = sbb + gxb * gxb * vxx + 2.0 * gxb * gyb * vxy + gyb * gyb * vyy + bias * kb * kb
+    pab = sab + gxa * gxb * vxx + (gxa * gyb + gya * gxb) * vxy + gya * gyb * vyy + bias * ka * kb
+    return (a, b), (paa, pab, pbb)
+
+
+def _quadratic(covariance: tuple[float, float, float], c: float, s: float) -> float:
+    """``(c, s) P (c, s)ᵀ`` of ``P = (var a, cov, var b)``, at least 0."""
+    paa, pab, pbb = covariance
+    return max(c * c * paa + 2.0 * c * s * pab + s * s * pbb, 0.0)
