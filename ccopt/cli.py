@@ -33,6 +33,7 @@ import numpy as np
 from ccopt import __version__, objects, record, validation
 from ccopt.cliutil import INTERRUPTED, OneLineParser, fail, print_table, seed_value, stop_signals
 from ccopt.objects import PlanarObject
+from ccopt.plant.base import MIN_RATE, PlantParams
 from ccopt.schedule import Schedule, load_schedule
 
 if TYPE_CHECKING:
@@ -54,10 +55,6 @@ def parse_vertices(text: str) -> np.ndarray:
     return vertices * 1e-3
 
 
-MIN_RATE = 1.0
-"""Slowest estimator or controller rate of a run, Hz."""
-
-
 def check_numbers(args: argparse.Namespace) -> None:
     """The numbers of ``ccopt run``, each named by its flag in a ``ValueError``: finite, masses and
     friction in range, rates from :data:`MIN_RATE` to the plant's own rate.
@@ -66,7 +63,6 @@ def check_numbers(args: argparse.Namespace) -> None:
     sideways and the object cannot pivot on the ground, and the friction estimate has nothing to
     measure.
     """
-    from ccopt.plant.base import PlantParams
 
     if args.mass is not None:
         validation.positive("--mass", args.mass)

@@ -34,7 +34,7 @@ from ccopt.hand import Hand
 from ccopt.health import HealthParams, SensorHealth
 from ccopt.modes import MOTION_CODES
 from ccopt.objects import PlanarObject
-from ccopt.plant.base import Plant, PlantParams, StartConfig
+from ccopt.plant.base import MIN_RATE, Plant, PlantParams, StartConfig
 from ccopt.plant.placement import hand_over_vertex
 from ccopt.plant.sensors import SensorParams, Sensors
 from ccopt.record import RecordWriter
@@ -96,8 +96,8 @@ class LoopParams:
         top = 1.0 / self.plant_params.timestep
         for name in ("estimator_hz", "controller_hz"):
             rate = getattr(self, name)
-            if not (np.isfinite(rate) and 0.0 < rate <= top):
-                raise ValueError(f"{name} must be in (0, {top:g}] Hz, got {rate!r}")
+            if not (np.isfinite(rate) and MIN_RATE <= rate <= top):
+                raise ValueError(f"{name} must be in [{MIN_RATE:g}, {top:g}] Hz, got {rate!r}")
         self.controller_params.check_hand(self.hand)
 
     def ticks(self, rate: float) -> int:
@@ -431,7 +431,7 @@ class _Loop:
                 if tick % controller_every == 0:
                     self._control()
                 if self.plant.time >= limit:
-                    self._stop("timeout", f"the run's time limit of {limit:.0f} s (simulated) ran out")
+                    self._stop("timeout", f"the run's time limit of {limit:g} s (simulated) ran out")
         except KeyboardInterrupt:
             self.status, self.message = "interrupted", "interrupted"
         except Exception as error:

@@ -172,11 +172,17 @@ def summarize(
     wall_time: float,
     status: str = "completed",
 ) -> dict[str, object]:
-    """The ``summary.json`` of a run (docs/architecture.md §8); ``status`` is how the run ended."""
+    """The ``summary.json`` of a run (docs/architecture.md §8); ``status`` is how the run ended.
+
+    A run that stopped before its first sample (``data`` empty) is summarised with nothing measured:
+    no step done, every statistic None.
+    """
+    if len(data.get("time", ())) == 0:
+        return _unmeasured(steps_total, sim_time, wall_time, status)
     ratios = realised_ratios(data, steps)
     slips = unintended_slips(data, steps)
     contacts = np.asarray(data["true_contacts"], dtype=bool)
-    kept_contact = bool(np.mean(contacts.all(axis=1)) >= CONTACT_SHARE) if contacts.size else False
+    kept_contact = bool(np.mean(contacts.all(axis=1)) >= CONTACT_SHARE)
     steps_done = sum(bool(step["reached"] or step.get("explore")) for step in steps)
     valid = np.asarray(data["est_kinematics_valid"], dtype=bool)
     return {
@@ -195,6 +201,33 @@ def summarize(
         "slip_events": slips,
         "mode_confusion": mode_confusion(data),
         "infeasible_ticks_share": float(1.0 - np.mean(data["qp_feasible"])),
+        "sim_time_s": float(sim_time),
+        "wall_time_s": float(wall_time),
+    }
+
+
+def _unmeasured(steps_total: int, sim_time: float, wall_time: float, status: str) -> dict[str, object]:
+    """:func:`summarize` of a run without a sample: the same keys, nothing measured."""
+    nothing = _stats(np.empty(0))
+    return {
+        "status": status,
+        "completed": False,
+        "steps_done": 0,
+        "steps_total": steps_total,
+        "contact_kept": False,
+        **{key: dict(nothing) for key in ("theta_err_deg", "s_h_err_mm", "s_g_err_mm")},
+        "kinematics_valid_share": 0.0,
+        "ratio_realised_commanded": quartiles(()),
+        "ratio_by_kind": {kind: quartiles(()) for kind in modes.KINDS[1:]},
+        "normal_force_n": normal_force({}),
+        "infeasible_steps": [],
+        "unintended_slips": 0,
+        "slip_events": [],
+        "mode_confusion": {
+            name: {"moving_reported_sticking": None, "sticking_reported_moving": None}
+            for name in CONTACT_NAMES
+        },
+        "infeasible_ticks_share": None,
         "sim_time_s": float(sim_time),
         "wall_time_s": float(wall_time),
     }

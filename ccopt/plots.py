@@ -198,8 +198,9 @@ def _draw_hand_cone(ax: Axes, record: Record) -> None:
     if not _has(record, "hand_wrench", "true_modes", "true_contacts"):
         _no_data(ax)
         return
-    touching = record.data["true_contacts"][:, 0].astype(bool)
-    points = record.data["hand_wrench"][touching, :2]
+    wrench = record.data["hand_wrench"]
+    touching = record.data["true_contacts"][:, 0].astype(bool) & np.isfinite(wrench[:, :2]).all(axis=1)
+    points = wrench[touching, :2]
     _scatter_by_mode(ax, points, record.data["true_modes"][touching, 0] != 0)
     mu = _last_finite(record.data["est_mu_h"]) if "est_mu_h" in record.data else None
     if mu is not None:
@@ -250,8 +251,9 @@ def _draw_ground_cone(ax: Axes, record: Record) -> None:
     if not _has(record, "hand_pose", "hand_wrench", "true_modes", "true_contacts"):
         _no_data(ax)
         return
-    touching = record.data["true_contacts"].astype(bool).all(axis=1)
-    points = _world_forces(record)[touching]
+    forces = _world_forces(record)
+    touching = record.data["true_contacts"].astype(bool).all(axis=1) & np.isfinite(forces).all(axis=1)
+    points = forces[touching]  # (a sensor dropout or dead sensor reads NaN)
     if len(points) == 0:
         _no_data(ax)
         return

@@ -204,7 +204,7 @@ def test_an_exception_in_the_run_is_one_line_and_exit_1(tmp_path):
 
 
 def test_an_exception_before_the_first_sample_keeps_the_record(tmp_path, capsys, monkeypatch):
-    """The loop closes its record as ``error``; scoring an empty record then fails too: one line."""
+    """The loop closes its record as ``error``, scored with nothing measured: one line, exit 1."""
 
     def broken(self, *args, **kwargs):
         raise FloatingPointError("the estimator overflowed")
@@ -213,9 +213,10 @@ def test_an_exception_before_the_first_sample_keeps_the_record(tmp_path, capsys,
     out = tmp_path / "run"
     assert cli.main(["run", *QUICK, "--out", str(out)]) == 1
     err = [line for line in capsys.readouterr().err.splitlines() if not line.startswith("warning:")]
-    assert len(err) == 1 and err[0].endswith(f"; the record is in {out}")
-    assert err[0].startswith("ccopt run: error: the run ended 'error' (FloatingPointError: the estimator")
+    assert err == ["ccopt run: error: FloatingPointError: the estimator overflowed"]
     assert record.load_record(out).meta["status"] == "error"
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "error" and summary["steps_done"] == 0
 
 
 @pytest.mark.parametrize(

@@ -63,5 +63,17 @@ def test_an_interrupted_run_keeps_its_record(tmp_path):
 def test_bad_loop_parameters_raise():
     with pytest.raises(ValueError, match="controller_hz"):
         closed_loop.LoopParams(controller_hz=0.0)
+    with pytest.raises(ValueError, match=r"estimator_hz must be in \[1, 1000\] Hz"):
+        closed_loop.LoopParams(estimator_hz=1e-310)  # one tick a googol of years: refused
     with pytest.raises(ValueError, match="unknown plant 'robot'"):
         closed_loop.LoopParams(plant="robot")
+
+
+def test_a_run_without_a_sample_is_summarised_with_the_same_keys_and_nothing_measured(smoke_run):
+    _, measured = smoke_run
+    summary = metrics.summarize({}, [], 5, 0.0, 0.01, status="error")
+    assert summary.keys() == measured.keys() and summary["status"] == "error"
+    assert not summary["completed"] and summary["steps_done"] == 0 and summary["steps_total"] == 5
+    assert summary["theta_err_deg"]["median"] is None and summary["normal_force_n"]["max"] is None
+    assert summary["ratio_by_kind"].keys() == measured["ratio_by_kind"].keys()
+    assert summary["mode_confusion"].keys() == measured["mode_confusion"].keys()

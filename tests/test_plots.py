@@ -267,3 +267,20 @@ def test_empty_and_short_records_say_no_data(empty, tmp_path):
         paths = plots.write_figures(record, tmp_path / record.folder.name / "figures")
         assert all(path.stat().st_size > 0 for path in paths)
     assert "no data" in _texts(plots.friction_cones(empty))
+
+
+def test_a_record_with_sensor_dropouts_draws_every_figure_from_its_finite_samples(tmp_path):
+    """A dropout or a dead sensor records NaN measurements: the figures leave those samples out."""
+    samples = _samples()[::10]
+    for sample in samples[20:35]:
+        sample["hand_pose"] = np.full(3, np.nan)
+        sample["hand_wrench"] = np.full(3, np.nan)
+    record = _write(tmp_path / "dropouts", samples)
+    fig = plots.friction_cones(record)
+    hand, ground = fig.axes[:2]
+    shown = sum(len(collection.get_offsets()) for collection in hand.collections)
+    touching = record.data["true_contacts"][:, 0] & np.isfinite(record.data["hand_wrench"][:, 0])
+    assert shown == int(touching.sum()) < len(samples) - 15
+    assert np.isfinite(ground.get_xlim()).all() and np.isfinite(ground.get_ylim()).all()
+    for path in plots.write_figures(record, tmp_path / "figures"):
+        assert path.stat().st_size > 0

@@ -1,17 +1,34 @@
-"""Simulated plants (MuJoCo), their sensors and their ground truth."""
+"""Simulated plants (MuJoCo), their sensors and their ground truth.
 
-from ccopt.plant.base import Plant, PlantParams, StartConfig
-from ccopt.plant.mujoco_planar import PlanarPlant
-from ccopt.plant.sensors import Measurement, SensorParams, Sensors
-from ccopt.plant.truth import Truth
+Exports load on first use, so that a light submodule (e.g. :mod:`ccopt.plant.base` for the CLI's
+checks) does not load MuJoCo.
+"""
 
-__all__ = [
-    "Measurement",
-    "PlanarPlant",
-    "Plant",
-    "PlantParams",
-    "SensorParams",
-    "Sensors",
-    "StartConfig",
-    "Truth",
-]
+from __future__ import annotations
+
+import importlib
+
+_EXPORTS = {
+    "Measurement": "ccopt.plant.sensors",
+    "PlanarPlant": "ccopt.plant.mujoco_planar",
+    "Plant": "ccopt.plant.base",
+    "PlantParams": "ccopt.plant.base",
+    "SensorParams": "ccopt.plant.sensors",
+    "Sensors": "ccopt.plant.sensors",
+    "StartConfig": "ccopt.plant.base",
+    "Truth": "ccopt.plant.truth",
+}
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str) -> object:
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'ccopt.plant' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(__all__)

@@ -28,6 +28,10 @@ def planar_vector(name: str, value: ArrayLike) -> np.ndarray:
     return vector
 
 
+MIN_RATE = 1.0
+"""Slowest rate at which a loop may read a plant's sensors or command it, Hz."""
+
+
 @dataclass(frozen=True)
 class PlantParams:
     """Numerical parameters of a simulated plant (the hand's own are in :class:`~ccopt.hand.Hand`).
