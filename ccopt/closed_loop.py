@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from ccopt import geometry, modes, validation
+from ccopt import contact, geometry, modes, validation
 from ccopt.contact import GROUND_ROWS
 from ccopt.control.controller import Command, ControlInput, Controller, ControllerParams
 from ccopt.control.targets import UNJUDGED, StaticsTarget, statics_target
@@ -184,9 +184,13 @@ def control_input(
     estimate: Estimate, hand_pose: np.ndarray, coordinates: np.ndarray, target: StaticsTarget = UNJUDGED
 ) -> ControlInput:
     """What the controller reads from an estimate, the measured hand pose, the progress source and the
-    estimated statics' target."""
+    estimated statics' target (with the hand friction it explores, if any: :mod:`ccopt.control.targets`)."""
+    values = {name: getattr(estimate, name) for name in _FROM_ESTIMATE if name != "row_valid"}
+    if target.mu_h is not None:
+        values["cone_rows"] = contact.with_hand_friction(estimate.cone_rows, target.mu_h)
+        values["mu_h"] = target.mu_h
     return ControlInput(
-        **{name: getattr(estimate, name) for name in _FROM_ESTIMATE if name != "row_valid"},
+        **values,
         row_valid=enforced_rows(estimate),
         l_h=estimate.torque_lever,
         hand_angle=float(hand_pose[2]),
@@ -479,7 +483,7 @@ class _Loop:
         p = self.params.controller_params
         aim = statics_target(
             estimate, float(hand_pose[2]), tracker.command.motion, self.params.hand.force_limits,
-            p.normal_force, p.statics_margin,
+            p.normal_force, p.statics_margin, p.friction_step,
         )
         if tracker.fresh and tracker.step.kind != "hold":
             reason = self._ruled_out(aim, estimate, hand_pose)

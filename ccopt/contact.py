@@ -216,6 +216,14 @@ def friction_cone(
     return _numeric["cone_rows"](theta_h, mu_h, l_h, ground_a, ground_b)
 
 
+def with_hand_friction(rows: ArrayLike, mu_h: float) -> np.ndarray:
+    """Cone rows ``N`` (6×3, :class:`Row` order) with the hand friction rows taken at ``mu_h``
+    (:data:`hand_rows`: ``−μ_h f_n ∓ f_t ≤ 0``)."""
+    changed = np.array(rows, dtype=float)
+    changed[[Row.HAND_SLIDE_POS, Row.HAND_SLIDE_NEG], 0] = -mu_h
+    return changed
+
+
 def model_ground_rows(mu_g: float, mass: float) -> tuple[np.ndarray, np.ndarray]:
     """Numeric :data:`ground_rows_world` for a horizontal ground and an object of ``mass`` kg."""
     return _numeric["ground_rows_world"](mu_g, weight(mass))

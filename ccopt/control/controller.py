@@ -96,6 +96,9 @@ class ControllerParams:
             estimated statics allow it (:func:`ccopt.statics.regulation_wrench`).
         statics_margin_share: the share of that margin the QP's rows keep at most (the rows' own
             margins above apply where they are smaller).
+        friction_step: how far beyond ``μ̂_h`` (the largest friction ratio the hand was seen to
+            hold) a motion may explore the hand friction where ``μ̂_h`` leaves it short of its
+            margin (:mod:`ccopt.control.targets`); 0 never explores.
         infeasible_margin: a step whose estimated statics margin is below ``−infeasible_margin`` (N)
             when it starts is not forced: it ends ``infeasible`` with the reason.
         length_unit, angle_unit, force_unit: the units in which the QP weighs its terms and its
@@ -126,6 +129,7 @@ class ControllerParams:
     slide_onset: float = 0.001
     statics_margin: float = 3.0
     statics_margin_share: float = 0.5
+    friction_step: float = 0.1
     infeasible_margin: float = 1.0
     length_unit: float = 1e-3
     angle_unit: float = math.radians(1.0)

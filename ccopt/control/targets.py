@@ -12,18 +12,30 @@ configuration need.
 (:func:`ccopt.statics.regulation_wrench`: the normal force nearest the nominal one at the margin the
 motion needs) and that margin; before the kinematics are known nothing can be judged and the
 controller keeps its nominal force.
+
+**Exploring the hand friction.** ``μ̂_h`` is a lower bound, the largest ratio ``|f_t|/f_n`` seen
+sticking (:mod:`ccopt.estimation.friction`): judged on it alone, a motion that needs a little more
+(e.g. a ground slide, which the hand must push sideways) stays out of reach for good, since the
+controller then never asks for a larger ratio and ``μ̂_h`` never grows. Where ``μ̂_h`` leaves a motion
+that keeps the hand sticking short of its margin goal, the target is taken on ``μ̂_h + friction_step``
+if that does better, and says so (:attr:`StaticsTarget.mu_h`): the controller's hand friction rows
+then use it. The hand is asked for at most one step more than it was seen to hold; if it holds, the
+estimate follows and the next step is taken from there; if it does not, it slides at the true
+``μ_h``, which the estimate then learns.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from ccopt import contact, statics
+from ccopt.contact import GROUND_ROWS
 from ccopt.estimation.estimator import Estimate
-from ccopt.modes import Motion
+from ccopt.modes import REMOVED_ROWS, Motion, kept_contacts
 
 
 @dataclass(frozen=True)
@@ -35,11 +47,14 @@ class StaticsTarget:
         tangential: tangential force of the regulation wrench, N (None: hold the current one).
         margin: the motion's estimated margin, N: ``-inf`` where the estimate rules it out, NaN where
             the estimate cannot judge yet.
+        mu_h: the hand friction the target assumes where it explores beyond ``μ̂_h`` (module
+            docstring), None where it takes ``μ̂_h``.
     """
 
     force: float | None
     tangential: float | None
     margin: float
+    mu_h: float | None = None
 
     @property
     def judged(self) -> bool:
@@ -50,22 +65,42 @@ class StaticsTarget:
 UNJUDGED = StaticsTarget(None, None, math.nan)
 
 
-def estimated_statics(estimate: Estimate, hand_angle: float) -> statics.ObjectStatics | None:
-    """The object's statics as the estimate knows them (None before the kinematics are known).
+def estimated_statics(
+    estimate: Estimate, hand_angle: float, mu_h: float | None = None, motion: Motion | None = None
+) -> statics.ObjectStatics | None:
+    """The object's statics as the estimate knows them (None before the kinematics are known), with
+    the hand friction ``mu_h`` instead of ``μ̂_h`` if given.
 
-    The gravity moment is the measured one at the current configuration (module docstring).
+    The gravity moment is the measured one at the current configuration (module docstring). A ground
+    row counts as known where it is the ground's friction face (``Estimate.ground_fitted``: the
+    ground slid that way); else it is only where the sticking forces seen end, which bounds nothing a
+    sticking motion may do. The row a ground slide of ``motion`` crosses is the exception: its
+    estimate, a face of the sticking forces inside the true one, is where that slide is sought.
     """
     values = (estimate.d, estimate.s_h, estimate.mu_h, *estimate.wrench)
     if not (estimate.kinematics_valid and all(map(math.isfinite, values))):
         return None
-    v_theta = contact.admissible_motions(hand_angle, estimate.s_h, estimate.d)[:, 0]
-    moment = -float(v_theta @ estimate.wrench)
-    gravity = statics.GravityMoment(moment * math.cos(hand_angle), moment * math.sin(hand_angle))
+    gravity = _gravity(estimate, hand_angle)
     rows, bounds = np.asarray(estimate.ground_rows), np.asarray(estimate.ground_bounds)
     if not (np.all(np.isfinite(rows)) and np.all(np.isfinite(bounds))):
         return None
-    known = tuple(estimate.ground_fitted)
-    return statics.ObjectStatics(estimate.mu_h, rows, bounds, estimate.d, gravity, known)
+    known = list(estimate.ground_fitted)
+    for row in REMOVED_ROWS[motion] if motion is not None else ():
+        if row in GROUND_ROWS:
+            known[GROUND_ROWS.index(row)] = True
+    friction = estimate.mu_h if mu_h is None else mu_h
+    return statics.ObjectStatics(friction, rows, bounds, estimate.d, gravity, tuple(known))
+
+
+def _gravity(estimate: Estimate, hand_angle: float) -> statics.GravityMoment:
+    """The estimated gravity moment where it is valid, else the measured one at the current
+    configuration (module docstring)."""
+    model = estimate.gravity
+    if model.valid:
+        return statics.GravityMoment(model.a, model.b)
+    v_theta = contact.admissible_motions(hand_angle, estimate.s_h, estimate.d)[:, 0]
+    moment = -float(v_theta @ estimate.wrench)
+    return statics.GravityMoment(moment * math.cos(hand_angle), moment * math.sin(hand_angle))
 
 
 def statics_target(
@@ -75,9 +110,32 @@ def statics_target(
     force_limits: tuple[float, float],
     nominal_force: float,
     margin_goal: float,
+    friction_step: float = 0.0,
 ) -> StaticsTarget:
-    """The regulation wrench and margin of ``motion`` on the estimated statics (see the module)."""
-    known = estimated_statics(estimate, hand_angle)
+    """The regulation wrench and margin of ``motion`` on the estimated statics, exploring the hand
+    friction by ``friction_step`` where ``μ̂_h`` falls short (see the module)."""
+    target = _target(estimate, hand_angle, motion, force_limits, nominal_force, margin_goal)
+    if not (friction_step > 0.0 and target.judged and target.margin < margin_goal):
+        return target
+    if not kept_contacts(motion)[0]:
+        return target  # a hand slide: the friction is what it slides at, not to be explored
+    mu_h = estimate.mu_h + friction_step
+    bolder = _target(estimate, hand_angle, motion, force_limits, nominal_force, margin_goal, mu_h)
+    if bolder.judged and bolder.margin > target.margin:
+        return dataclasses.replace(bolder, mu_h=mu_h)
+    return target
+
+
+def _target(
+    estimate: Estimate,
+    hand_angle: float,
+    motion: Motion,
+    force_limits: tuple[float, float],
+    nominal_force: float,
+    margin_goal: float,
+    mu_h: float | None = None,
+) -> StaticsTarget:
+    known = estimated_statics(estimate, hand_angle, mu_h, motion)
     if known is None:
         return UNJUDGED
     result = statics.regulation_wrench(
@@ -92,7 +150,7 @@ def statics_target(
     )
     if math.isnan(result.margin):
         return UNJUDGED
-    if result.wrench is None or result.margin < 0.0:
-        return StaticsTarget(None, None, result.margin if result.wrench is not None else -math.inf)
-    f_n, f_t, _ = result.wrench
+    if result.wrench is None:
+        return StaticsTarget(None, None, -math.inf)
+    f_n, f_t, _ = result.wrench  # short of margin, still the best there is
     return StaticsTarget(float(f_n), float(f_t), result.margin)

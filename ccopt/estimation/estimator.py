@@ -89,6 +89,9 @@ class EstimatorParams:
         gravity: the weight's moment about the ground contact.
         theta_filter: filter of ``θ_o`` while it is the hand's angle (flush hand).
         contact_force: the hand is in contact while ``f_n`` exceeds this (N).
+        ground_slid_distance: the estimated ground contact ``s_g`` moving this far (m) one way while
+            the ground is meant to slide that way shows that it slid: only then is that side's hull
+            face its friction face (:class:`GroundSlides`).
     """
 
     friction: HandFrictionParams = field(default_factory=HandFrictionParams)
@@ -99,6 +102,7 @@ class EstimatorParams:
     gravity: GravityParams = field(default_factory=GravityParams)
     theta_filter: AngleFilterParams = field(default_factory=AngleFilterParams)
     contact_force: float = 1.0
+    ground_slid_distance: float = 2e-3
 
     def __post_init__(self) -> None:
         parts = (
@@ -112,6 +116,7 @@ class EstimatorParams:
         )
         validation.check_types((name, getattr(self, name), kind) for name, kind in parts)
         check_number("contact_force", self.contact_force, low_open=False)
+        check_number("ground_slid_distance", self.ground_slid_distance)
 
 
 @dataclass(frozen=True)
@@ -130,8 +135,11 @@ class Estimate:
         ground_rows, ground_bounds: ground rows ``A f ≤ b`` on the world hand force (2×2 unit
             normals, 2 offsets in N), rows ``GROUND_SLIDE_POS``, ``GROUND_SLIDE_NEG``.
         mu_g: ground friction coefficient from the two fitted faces (NaN until both are fitted).
-        ground_fitted: per ground row, whether it was fitted to a friction face of the hull (the
-            ground slid that way), rather than a conservative row at the extent of the data.
+        ground_fitted: per ground row, whether it is the ground's friction face: the hull has a
+            straight face on that side *and* the ground slid that way (:class:`GroundSlides`).
+            Otherwise the row is where the sticking forces seen end (a face of the data, or the
+            conservative prior row): a bound the classifier respects, but not the friction limit,
+            so the statics of a motion (:mod:`ccopt.control.targets`) do not count it as one.
         hand_mode, hand_geometry, ground_mode: the classified contact configuration.
         in_contact: whether the hand touches the object (``f_n > contact_force``).
         theta_o, s_h, s_g, d, r_o: the kinematics (rad, m), NaN where not estimated.
@@ -214,6 +222,7 @@ class Estimator:
         self.kinematics = KinematicEstimator(self.hand.half_length, self.params.kinematics)
         self.theta_filter = AngleFilter(self.params.theta_filter)
         self.gravity = GravityEstimator(self.params.gravity)
+        self.ground_slides = GroundSlides(self.params.ground_slid_distance)
         self._cone_input = np.zeros(12)
         self._cone_ground: GroundCone | None = None
         self._last: Estimate | None = None
@@ -283,7 +292,13 @@ class Estimator:
             theta_o, values[1:4], values[4:7], kinematics, self.kinematics.ground_contact()
         )
         self._last = _assemble(
-            time, wrench, cone, *parts, rough=self._rough(theta_o, kinematics), gravity=gravity
+            time,
+            wrench,
+            cone,
+            *parts,
+            rough=self._rough(theta_o, kinematics),
+            gravity=gravity,
+            slid=self.ground_slides.update(kinematics.s_g, _ground_sliding_way(commanded, kinematics)),
         )
         return self._last
 
@@ -317,6 +332,47 @@ class Estimator:
         if self._last is None:
             return _empty_estimate(time, self.friction, self.ground)
         return dataclasses.replace(self._last, time=float(time), skipped=True)
+
+
+def _ground_sliding_way(commanded: ContactConfiguration | None, kinematics: KinematicEstimate) -> int | None:
+    """The way the ground contact is meant to slide: ``±1`` as commanded, 0 if it is meant to stick;
+    without a command, either way (None) while the kinematics let it move, else 0. Not the reports:
+    a hull edge the data merely end at is reported as a face, the kinematics then follow the ground
+    (a cheap false alarm for them), and a pivot's rotation through a slightly wrong ``d`` would pass
+    for a slide."""
+    if commanded is not None:
+        return int(commanded.ground_mode)
+    return 0 if kinematics.ground_fixed else None
+
+
+class GroundSlides:
+    """Which ways the ground has been seen sliding: while it is meant to slide one way
+    (:func:`_ground_sliding_way`), the estimated ``s_g`` moved by at least ``distance`` (m) that
+    way. Only then is that side's hull face the friction face; before, it is merely where the data
+    end (e.g. the hand forces of pivots at a tilted hand lie along a straight edge of the hull that
+    looks like a face). The way counts: when the kinematics start following a sliding ground,
+    ``ŝ_g`` first jumps by up to a millimetre either way.
+    """
+
+    def __init__(self, distance: float) -> None:
+        self.distance = check_number("distance", distance)
+        self.slid = [False, False]
+        """Per ground row (``GROUND_SLIDE_POS``: ``+x``, ``GROUND_SLIDE_NEG``: ``−x``)."""
+        self._start = math.nan  # s_g where the ground was last let move
+
+    def update(self, s_g: float, way: int | None) -> tuple[bool, bool]:
+        """Advance with the current ``s_g`` estimate (m, NaN if unknown) and the way the ground is
+        meant to slide (``±1``, 0 not at all, None either way); the ways seen so far."""
+        if way == 0 or not math.isfinite(s_g):
+            self._start = math.nan
+        elif math.isnan(self._start):
+            self._start = s_g
+        else:
+            moved = s_g - self._start
+            if abs(moved) >= self.distance and (way is None or moved * way > 0.0):
+                self.slid[0 if moved > 0.0 else 1] = True
+                self._start = s_g
+        return self.slid[0], self.slid[1]
 
 
 def commanded_modes(
@@ -396,9 +452,11 @@ def _assemble(
     *,
     rough: tuple[tuple[float, ...], tuple[float, ...]] = ((math.nan,) * 4, (math.nan,) * 4),
     gravity: GravityEstimate = UNKNOWN_GRAVITY,
+    slid: tuple[bool, bool] = (False, False),
 ) -> Estimate:
     """An :class:`Estimate` from its parts (its arrays made read-only); ``rough`` is
-    ``(kinematics_mean, kinematics_std)``."""
+    ``(kinematics_mean, kinematics_std)``, ``slid`` the ways the ground was seen sliding."""
+    fitted = (ground.fitted[0] and slid[0], ground.fitted[1] and slid[1])
     row_valid = np.array(valid)
     wrench.flags.writeable = False
     row_valid.flags.writeable = False
@@ -414,8 +472,8 @@ def _assemble(
         torque_lever=friction.l_h_eff,
         ground_rows=ground.A,
         ground_bounds=ground.b,
-        mu_g=ground.mu_g,
-        ground_fitted=tuple(ground.fitted),
+        mu_g=ground.mu_g if all(fitted) else math.nan,
+        ground_fitted=fitted,
         **{name: getattr(modes, name) for name in _MODE_FIELDS},
         in_contact=in_contact,
         theta_o=theta_o,

@@ -50,10 +50,14 @@ from ccopt.geometry import WORLD_UP
 
 _TIME_TOLERANCE = 1e-9
 """Intervals are compared with this slack (s), so that sample times with rounding errors still count."""
-FACE_COSINE_RANGE = (-0.2, math.cos(math.radians(15.0)))
-"""``up·ν`` of a friction face's outward normal ``ν``: it is ``sin(atan μ_g) ∈ (0, 1)``; faces within
-15° of "up" (μ_g > 3.7) are the hull's top, where the force is smallest, and faces more than ~12°
-below the horizontal its bottom."""
+FACE_COSINE_RANGE = (math.sin(math.radians(3.0)), math.cos(math.radians(15.0)))
+"""``up·ν`` of a friction face's outward normal ``ν``: it is ``sin(atan μ_g − α)`` on a ground tilted
+by ``α`` towards that side, positive on any ground that holds the object at rest (``α < atan μ_g``):
+pressing down never lets a ground contact slide sooner. Faces within 15° of "up" (μ_g > 3.7) are the
+hull's top, where the force is smallest; faces within 3° of the horizontal or below it are not
+friction faces but the hull's sides and bottom, where the data end (on a closed-loop recording of
+the paper triangle, the edge of the hand forces of pivots at a tilted hand, ``up·ν = −0.18``, passed
+for a friction face and ruled out the pivots beyond it)."""
 FACE_WINDOW_STEPS = 2.1
 """A face's polygon edges have normals within this many direction steps of the face's normal."""
 
@@ -331,7 +335,8 @@ def _friction_face(
         end += 1
     while end - start < count - 1 and extends(start - 1):
         start -= 1
-    return _chord(vertices[(start - 1) % count], vertices[end % count])
+    row = _chord(vertices[(start - 1) % count], vertices[end % count])
+    return row if row is not None and low <= row[0][0] * up[0] + row[0][1] * up[1] <= high else None
 
 
 def _chord(start: tuple[float, float], end: tuple[float, float]) -> Row2 | None:

@@ -41,11 +41,13 @@ class Tour:
         allowed: per slide kind and sign, how many distinct edges of it the graph reachable from the
             start holds (``{"slide_hand": {1: n, -1: m}, ...}``).
         counts: the number of steps of each kind in the schedule.
+        edges: the graph's edges the schedule's motions follow (with their margins).
     """
 
     schedule: Schedule
     allowed: dict[str, dict[int, int]]
     counts: dict[str, int] = field(default_factory=dict)
+    edges: tuple[Edge, ...] = ()
 
 
 def reachable_nodes(graph: ConfigurationGraph, source: Node, limit: int = 2000) -> set[Node]:
@@ -127,7 +129,7 @@ def possible_tour(
     steps = (hold(0.5), *explore, *(_as_step(edge, timeout) for edge in edges), hold(0.5))
     schedule = Schedule(name, steps)
     counts = {kind: sum(edge.kind == kind for edge in edges) for kind in ("pivot", *SLIDE_KINDS)}
-    return Tour(schedule, allowed, counts)
+    return Tour(schedule, allowed, counts, tuple(edges))
 
 
 def _explorable(graph: ConfigurationGraph) -> bool:
@@ -183,12 +185,14 @@ def plan_tour(
 ) -> tuple[LoopParams, Tour]:
     """The experimenter's schedule for ``obj``: among start positions ``s_h`` of the hand along its
     face (``candidates`` of them, at the run's start tilt), the one whose :func:`possible_tour` holds
-    the most slides (up to the number asked for of each kind), with the loop parameters that start
-    there. ``angle_range`` is the robot's reach in ``θ_h`` (rad); the object's own vertex range and
-    ``5°`` of clearance narrow it. Every step (and the start) keeps ``margin`` (N) with a normal force
-    within ``force_share`` of the hand's range and the estimate's torque lever: headroom for what the
-    statics ignore (the contacts' compliance, the dynamics). Uses the true object: never for the
-    estimator or the controller."""
+    the most slides (up to the number asked for of each kind), then the largest smallest margin along
+    its steps (a start off the ground contact may leave pivots possible only near the least normal
+    force, where the torque window ``±l_h f_n`` is a fraction of a degree of the hand's impedance),
+    with the loop parameters that start there. ``angle_range`` is the robot's reach in ``θ_h``
+    (rad); the object's own vertex range and ``5°`` of clearance narrow it. Every step (and the
+    start) keeps ``margin`` (N) with a normal force within ``force_share`` of the hand's range and
+    the estimate's torque lever: headroom for what the statics ignore (the contacts' compliance, the
+    dynamics). Uses the true object: never for the estimator or the controller."""
     base = dataclasses.replace(params.start, s_h=0.0)
     low, high = placement.face_s_h_range(obj, base)
     inset = params.hand.half_length + 2e-3
@@ -201,7 +205,7 @@ def plan_tour(
     lever = params.estimator_params.friction.torque_margin * params.hand.half_length  # as the run knows it
     f_min, f_max = params.hand.force_limits
     forces = (f_min, f_min + force_share * (f_max - f_min))  # headroom for what the model ignores
-    best: tuple[int, LoopParams, Tour] | None = None
+    best: tuple[tuple[int, float], LoopParams, Tour] | None = None
     for s_h in np.linspace(low + inset, high - inset, candidates):
         start = dataclasses.replace(base, s_h=float(s_h))
         trial = dataclasses.replace(params, start=start, centre_hand=False)
@@ -212,7 +216,8 @@ def plan_tour(
         if graph.margin(Node(0, 0), Motion.HOLD) < margin:
             continue  # the run could not even hold its start comfortably
         tour = possible_tour(graph, **tour_options)
-        score = sum(min(tour.counts[kind], wanted) for kind in SLIDE_KINDS)
+        slides = sum(min(tour.counts[kind], wanted) for kind in SLIDE_KINDS)
+        score = (slides, min((edge.margin for edge in tour.edges), default=math.inf))
         if best is None or score > best[0]:
             best = (score, trial, tour)
     if best is None:
