@@ -28,7 +28,7 @@ import numpy as np
 from ccopt import contact, geometry, modes, validation
 from ccopt.contact import GROUND_ROWS
 from ccopt.control.controller import Command, ControlInput, Controller, ControllerParams
-from ccopt.control.targets import UNJUDGED, StaticsTarget, statics_target
+from ccopt.control.targets import UNJUDGED, StaticsTarget, TargetGoal, statics_target
 from ccopt.estimation.estimator import Estimate, Estimator, EstimatorParams
 from ccopt.hand import Hand
 from ccopt.health import HealthParams, SensorHealth
@@ -401,6 +401,8 @@ class _Loop:
         self.sensors = Sensors(self.plant, params.sensor_params, seed)
         self.estimator = Estimator(params.hand, params.estimator_params)
         self.controller = Controller(params.hand, params.control_period, params.controller_params)
+        p = params.controller_params
+        self.goal = TargetGoal(params.hand.force_limits, p.normal_force, p.statics_margin, p.friction_step)
         self.health = SensorHealth(params.supervision.health(params.hand))
         self.writer = RecordWriter(out, meta or {}) if out is not None else None
         self.folder = Path(out) if out is not None else None
@@ -480,11 +482,7 @@ class _Loop:
         coordinates = tracker.coordinates(estimate, hand_pose)
         if coordinates is None:  # the estimate is unusable: hold where the command says
             coordinates = tracker.command.targets
-        p = self.params.controller_params
-        aim = statics_target(
-            estimate, float(hand_pose[2]), tracker.command.motion, self.params.hand.force_limits,
-            p.normal_force, p.statics_margin, p.friction_step,
-        )
+        aim = statics_target(estimate, float(hand_pose[2]), tracker.command.motion, self.goal)
         if tracker.fresh and tracker.step.kind != "hold":
             reason = self._ruled_out(aim, estimate, hand_pose)
             if reason:

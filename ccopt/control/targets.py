@@ -103,37 +103,40 @@ def _gravity(estimate: Estimate, hand_angle: float) -> statics.GravityMoment:
     return statics.GravityMoment(moment * math.cos(hand_angle), moment * math.sin(hand_angle))
 
 
-def statics_target(
-    estimate: Estimate,
-    hand_angle: float,
-    motion: Motion,
-    force_limits: tuple[float, float],
-    nominal_force: float,
-    margin_goal: float,
-    friction_step: float = 0.0,
-) -> StaticsTarget:
+@dataclass(frozen=True)
+class TargetGoal:
+    """What a statics target aims for.
+
+    Attributes:
+        force_limits: ``(f_min, f_max)``, the hand's normal force range (N).
+        nominal_force: the normal force preferred where the statics leave a choice (N).
+        margin: the margin the regulation wrench keeps where it can (N).
+        friction_step: how far beyond ``μ̂_h`` the hand friction may be explored (module docstring).
+    """
+
+    force_limits: tuple[float, float]
+    nominal_force: float
+    margin: float
+    friction_step: float = 0.0
+
+
+def statics_target(estimate: Estimate, hand_angle: float, motion: Motion, goal: TargetGoal) -> StaticsTarget:
     """The regulation wrench and margin of ``motion`` on the estimated statics, exploring the hand
-    friction by ``friction_step`` where ``μ̂_h`` falls short (see the module)."""
-    target = _target(estimate, hand_angle, motion, force_limits, nominal_force, margin_goal)
-    if not (friction_step > 0.0 and target.judged and target.margin < margin_goal):
+    friction by ``goal.friction_step`` where ``μ̂_h`` falls short (see the module)."""
+    target = _target(estimate, hand_angle, motion, goal)
+    if not (goal.friction_step > 0.0 and target.judged and target.margin < goal.margin):
         return target
     if not kept_contacts(motion)[0]:
         return target  # a hand slide: the friction is what it slides at, not to be explored
-    mu_h = estimate.mu_h + friction_step
-    bolder = _target(estimate, hand_angle, motion, force_limits, nominal_force, margin_goal, mu_h)
+    mu_h = estimate.mu_h + goal.friction_step
+    bolder = _target(estimate, hand_angle, motion, goal, mu_h)
     if bolder.judged and bolder.margin > target.margin:
         return dataclasses.replace(bolder, mu_h=mu_h)
     return target
 
 
 def _target(
-    estimate: Estimate,
-    hand_angle: float,
-    motion: Motion,
-    force_limits: tuple[float, float],
-    nominal_force: float,
-    margin_goal: float,
-    mu_h: float | None = None,
+    estimate: Estimate, hand_angle: float, motion: Motion, goal: TargetGoal, mu_h: float | None = None
 ) -> StaticsTarget:
     known = estimated_statics(estimate, hand_angle, mu_h, motion)
     if known is None:
@@ -144,9 +147,9 @@ def _target(
         estimate.s_h,
         motion,
         estimate.torque_lever,
-        force_limits,
-        nominal_force,
-        margin_goal,
+        goal.force_limits,
+        goal.nominal_force,
+        goal.margin,
     )
     if math.isnan(result.margin):
         return UNJUDGED
