@@ -215,34 +215,39 @@ class RecordWriter:
         self.run_id = uuid.uuid4().hex
         self.meta = {**meta, "status": "running", "versions": versions(), "run_id": self.run_id}
         self.flush_every = flush_every
-        self._buffer: dict[str, list[np.ndarray]] = {}
+        self._keys: tuple[str, ...] = ()
+        self._rows: list[dict[str, np.ndarray]] = []
         self._count = 0
         self._chunks = 0
         (self.folder / CHUNKS).mkdir(exist_ok=True)
         _write_json(self.folder / "meta.json", self.meta)
 
     def append(self, sample: dict[str, float | np.ndarray]) -> None:
-        """Add one sample; every ``flush_every`` samples a chunk is written to disk."""
-        if not self._buffer:
+        """Add one sample; every ``flush_every`` samples a chunk is written to disk.
+
+        A sample is kept whole or not at all: it enters the buffer in one list append, so that a
+        signal (Ctrl-C, SIGTERM) between two of its keys cannot leave the columns uneven."""
+        if not self._keys:
             if RUN_ID_KEY in sample:
                 raise ValueError(f"{RUN_ID_KEY!r} is reserved and cannot be a sample key")
-            self._buffer = {key: [] for key in sample}
-        elif sample.keys() != self._buffer.keys():
-            raise ValueError(f"sample keys changed: {sorted(set(sample) ^ set(self._buffer))}")
-        for key, value in sample.items():
-            self._buffer[key].append(np.asarray(value))
+            self._keys = tuple(sample)
+        elif sample.keys() != set(self._keys):
+            raise ValueError(f"sample keys changed: {sorted(set(sample) ^ set(self._keys))}")
+        row = {key: np.asarray(value) for key, value in sample.items()}
+        self._rows.append(row)
         self._count += 1
         if self._count % self.flush_every == 0:
             self.flush()
 
     def flush(self) -> None:
         """Write the buffered samples as the next chunk (atomically)."""
-        if not self._buffer or not next(iter(self._buffer.values())):
+        rows = self._rows
+        if not rows:
             return
+        arrays = {key: np.stack([row[key] for row in rows]) for key in self._keys}
         self._chunks += 1
-        arrays = {key: np.stack(values) for key, values in self._buffer.items()}
         _save_npz(self.folder / CHUNKS / f"chunk_{self._chunks:05d}.npz", arrays, self.run_id)
-        self._buffer = {key: [] for key in self._buffer}
+        self._rows = []
 
     def close(self, summary: dict[str, object] | None = None, status: str = "completed") -> Path:
         """Flush, consolidate the chunks into ``record.npz``, write ``summary.json`` and the status."""

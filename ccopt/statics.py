@@ -376,6 +376,27 @@ def true_statics(obj: PlanarObject, start: StartConfig, hand: Hand) -> TrueConfi
     return TrueConfiguration(statics, start.theta_o, start.s_h, s_h_range)
 
 
+def start_target(obj: PlanarObject, start: StartConfig, hand: Hand) -> np.ndarray:
+    """The hand's impedance target that holds ``start`` in equilibrium, world ``(x, y, θ)``: the hand
+    pose displaced by ``K⁻¹ w`` for the hold wrench ``w`` of the largest margin at
+    ``start.normal_force`` (the experimenter's tool, placing the plant: a pure normal push off the
+    ground contact is a moment ``f_n s_h`` the object may not hold, and a robot arm settling from its
+    inverse kinematics lets it fall). An object lying on a face, whose ground contact takes any
+    moment, and one no wrench holds get the pure normal push."""
+    object_pose, hand_pose, push = start_poses(obj, start, hand)
+    heights = geometry.transform_points(obj.vertices, object_pose)[:, 1]
+    if np.count_nonzero(heights <= heights.min() + geometry.LOWEST_TIE) > 1:
+        return push
+    truth = true_statics(obj, start, hand)
+    force = (start.normal_force, start.normal_force)
+    result = best_wrench(truth.statics, start.theta_o, start.s_h, Motion.HOLD, hand.half_length, force)
+    if result.wrench is None:
+        return push
+    f_n, f_t, torque = result.wrench
+    world = geometry.hand_force_to_world(start.theta_o, f_n, f_t)
+    return hand_pose + np.array([*world, torque]) / np.asarray(hand.stiffness)
+
+
 @dataclass(frozen=True)
 class StepFeasibility:
     """Whether one schedule step is physically possible at its nominal configuration.

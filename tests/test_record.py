@@ -47,3 +47,22 @@ def test_changing_keys_is_refused(tmp_path):
     writer.append(sample(0))
     with pytest.raises(ValueError, match="keys changed"):
         writer.append({"time": 1.0})
+
+
+class _Interrupting:
+    """A value whose conversion to an array is interrupted (as by Ctrl-C or SIGTERM mid-append)."""
+
+    def __array__(self, dtype=None, copy=None):
+        raise KeyboardInterrupt
+
+
+def test_a_sample_interrupted_while_appended_is_dropped_whole(tmp_path):
+    writer = record.RecordWriter(tmp_path / "run", {}, flush_every=3)
+    for k in range(4):
+        writer.append({"time": float(k), "x": np.full(2, k)})
+    with pytest.raises(KeyboardInterrupt):
+        writer.append({"time": 4.0, "x": _Interrupting()})
+    writer.close(status="interrupted")
+    data = record.load_record(tmp_path / "run").data
+    np.testing.assert_array_equal(data["time"], [0.0, 1.0, 2.0, 3.0])
+    assert data["x"].shape == (4, 2)

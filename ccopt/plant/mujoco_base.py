@@ -132,6 +132,17 @@ class MujocoPlant:
         """Advance the physics (and the plant's own control) by ``n_steps ≥ 1`` timesteps."""
         raise NotImplementedError
 
+    def _advance_holding_object(self, n_steps: int) -> None:
+        """Advance ``n_steps`` timesteps with the object held where it is, as the experimenter's hand
+        holds it while the robot presses on: the hand builds its force against an object that
+        cannot fall away first (a robot arm settling from its inverse kinematics takes tens of
+        milliseconds to press; an object its weight turns meanwhile falls)."""
+        pose = self._data.qpos[self._obj_qpos].copy()
+        for _ in range(n_steps):
+            self._data.qpos[self._obj_qpos] = pose
+            self._data.qvel[self._obj_dof] = 0.0
+            self._advance(1)
+
     # --- state -----------------------------------------------------------------------------------
 
     def object_pose(self) -> np.ndarray:

@@ -46,6 +46,7 @@ from ccopt.plant import scene
 from ccopt.plant.base import PlantParams, StartConfig, planar_vector
 from ccopt.plant.mujoco_base import HAND_GEOM, MujocoPlant, joint_slice
 from ccopt.plant.placement import start_poses
+from ccopt.statics import start_target
 from panda_model.hand import HandPlate, Mount
 from panda_model.impedance import OUT_OF_PLANE_STIFFNESS, ImpedanceGains, impedance_gains
 from panda_model.model import TASK_AXES, Panda, hand_rotation, inverse_kinematics, load_panda, planar_pose
@@ -174,8 +175,10 @@ class PandaPlant(MujocoPlant):
     Args:
         obj: the object.
         params: simulation parameters.
-        start: start configuration: the arm is put there by inverse kinematics, settles for
-            ``start.settle_time`` and then resets its clock to 0.
+        start: start configuration: the arm is put there by inverse kinematics with its target
+            holding the start in equilibrium (:func:`ccopt.statics.start_target`), presses for
+            half of ``start.settle_time`` with the object held in place, settles free for the
+            other half and then resets its clock to 0.
         hand: the robot's hand (plate length and body; ``stiffness`` is the planar hand stiffness,
             world axes).
         panda: Panda-specific settings.
@@ -198,7 +201,8 @@ class PandaPlant(MujocoPlant):
     def _build(self) -> None:
         self.plate = hand_plate(self.hand, self.params)
         self.panda: Panda = load_panda(self.plate, self.panda_params.mount, self.panda_params.armature)
-        object_pose, start_hand, target = start_poses(self.obj, self.start, self.hand)
+        object_pose, start_hand, _ = start_poses(self.obj, self.start, self.hand)
+        target = start_target(self.obj, self.start, self.hand)
         self.start_hand_pose = start_hand
         q_start = inverse_kinematics(self.panda, start_hand)
 
@@ -241,7 +245,9 @@ class PandaPlant(MujocoPlant):
         self.set_target(target)
         self._control()
         mujoco.mj_forward(m, self._data)
-        self.step(round(self.start.settle_time / self.timestep))
+        half = round(0.5 * self.start.settle_time / self.timestep)
+        self._advance_holding_object(half)
+        self.step(round(self.start.settle_time / self.timestep) - half)
         self._data.time = 0.0
 
     # --- commands --------------------------------------------------------------------------------

@@ -22,6 +22,7 @@ from ccopt.plant import scene
 from ccopt.plant.base import PlantParams, planar_vector
 from ccopt.plant.mujoco_base import HAND_GEOM, MujocoPlant, joint_slice
 from ccopt.plant.placement import start_poses
+from ccopt.statics import start_target
 
 HAND_BODY = "hand"
 HAND_JOINTS = ("hand_x", "hand_z", "hand_theta")
@@ -88,12 +89,15 @@ class PlanarPlant(MujocoPlant):
         obj: the object.
         params: simulation parameters.
         start: start configuration; the plant settles there for ``start.settle_time`` (pressing
-            with ``start.normal_force``) and then resets its clock to 0.
+            with the wrench that holds it in equilibrium at ``start.normal_force``,
+            :func:`ccopt.statics.start_target`; the object held in place for the first quarter)
+            and then resets its clock to 0.
         hand: the robot's hand (its length, impedance and body).
     """
 
     def _build(self) -> None:
-        object_pose, hand_pose, target = start_poses(self.obj, self.start, self.hand)
+        object_pose, hand_pose, _ = start_poses(self.obj, self.start, self.hand)
+        target = start_target(self.obj, self.start, self.hand)
         self._load(planar_model_xml(self.obj, self.params, self.hand))
         m = self._model
         hand_qpos, hand_dof = joint_slice(m, HAND_JOINTS), joint_slice(m, HAND_JOINTS, velocity=True)
@@ -115,16 +119,20 @@ class PlanarPlant(MujocoPlant):
         return HAND_ANGLE_RANGE
 
     def _settle(self, target: np.ndarray) -> None:
-        """Press towards ``target`` for the settle time, correcting the target once halfway so that
-        the contacts' compliance does not eat into the normal force; then reset the clock."""
-        half = round(0.5 * self.start.settle_time / self.timestep)
+        """Press towards ``target`` for the settle time, the object held for its first quarter;
+        correct the target once the object has settled free, so that the contacts' compliance does
+        not eat into the normal force; then reset the clock."""
+        steps = round(self.start.settle_time / self.timestep)
+        held = steps // 4
+        half = (steps - held) // 2
         self.set_target(target)
+        self._advance_holding_object(held)
         self.step(half)
         if half > 0:
             error = self.start.normal_force - self.hand_wrench()[0]
             e_n = geometry.hand_normal(self.start.theta_o)
             self.set_target(target + np.array([*(error * e_n / np.asarray(self.hand.stiffness[:2])), 0.0]))
-            self.step(half)
+        self.step(steps - held - half)
         self._data.time = 0.0
 
     # --- commands --------------------------------------------------------------------------------
