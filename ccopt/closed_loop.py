@@ -229,14 +229,17 @@ class _StepTracker:
 
     Targets chain from the *nominal* configuration: after a reached step the next one starts from
     where the previous one was commanded to end, not from where it stopped inside its tolerance, so
-    that small shortfalls do not add up; after a step that was not reached, or when the source of
+    that small shortfalls do not add up (a slide's own coordinate excepted: it cannot move back, so
+    it slides its length from where it is); after a step that was not reached, or when the source of
     progress changes (hand proxy → estimate), the nominal configuration is re-read. A step is reached
-    once its coordinate has stayed within tolerance for ``settle_time``; never on an unusable estimate.
+    once its coordinate has stayed within tolerance for ``settle_time``, or, a slide, once it has
+    gone past its target by more than the tolerance; never on an unusable estimate.
     """
 
-    def __init__(self, schedule: Schedule, settle_time: float) -> None:
+    def __init__(self, schedule: Schedule, settle_time: float, slide_onset: float) -> None:
         self.steps = schedule.steps
         self.settle_time = settle_time
+        self.slide_onset = slide_onset
         self.index = -1
         self.results: list[StepResult] = []
         self.use_estimate = False
@@ -281,8 +284,11 @@ class _StepTracker:
         if self._nominal is None:
             self._nominal = current.copy()
         targets = self._nominal.copy()
-        if self.step.coordinate is not None:
-            targets[self.step.coordinate] += self.step.delta
+        k = self.step.coordinate
+        if k is not None:
+            if modes.REMOVED_ROWS[self.step.motion]:
+                targets[k] = current[k]  # a slide cannot come back: it goes its length from here
+            targets[k] += self.step.delta
         self._nominal = targets.copy()
         self.command = Command(self.step.motion, targets, start=current, wrench=np.array(estimate.wrench))
         self.start_time = now
@@ -307,10 +313,21 @@ class _StepTracker:
             self._within_since = None
         elif self._within_since is None:
             self._within_since = now
-        if within and now - self._within_since >= self.settle_time - 1e-9:
+        if (within and now - self._within_since >= self.settle_time - 1e-9) or self._overshot(coordinates):
             self.advance(now, estimate, hand_pose, "reached")
         elif elapsed >= self.step.timeout:
             self.advance(now, estimate, hand_pose, "timeout")
+
+
+    def _overshot(self, coordinates: np.ndarray | None) -> bool:
+        """Whether a slide has gone past its target by more than its tolerance: its command cannot
+        bring it back (the row that would is kept), so the next step's must stop it. A "slide"
+        shorter than the controller's slide onset never frees its coordinate: it regulates it
+        (e.g. against a push) and ends at its timeout."""
+        k, step = self.step.coordinate, self.step
+        if coordinates is None or not modes.REMOVED_ROWS[step.motion] or abs(step.delta) < self.slide_onset:
+            return False
+        return (coordinates[k] - self.command.targets[k]) * math.copysign(1.0, step.delta) > step.tolerance
 
 
 RUN_STATUSES = ("completed", "interrupted", "contact_lost", "sensor_fault", "timeout", "error")
@@ -402,13 +419,15 @@ class _Loop:
         self.estimator = Estimator(params.hand, params.estimator_params)
         self.controller = Controller(params.hand, params.control_period, params.controller_params)
         p = params.controller_params
-        self.goal = TargetGoal(params.hand.force_limits, p.normal_force, p.statics_margin, p.friction_step)
+        self.goal = TargetGoal(
+            params.hand.force_limits, p.normal_force, p.statics_margin, p.friction_step, p.slide_beyond
+        )
         self.health = SensorHealth(params.supervision.health(params.hand))
         self.writer = RecordWriter(out, meta or {}) if out is not None else None
         self.folder = Path(out) if out is not None else None
         self.on_tick = on_tick
         self.samples: dict[str, list[np.ndarray]] = {}
-        self.tracker = _StepTracker(schedule, params.settle_time)
+        self.tracker = _StepTracker(schedule, params.settle_time, params.controller_params.slide_onset)
         self.target = np.array(self.plant.target(), dtype=float)
         self.velocity = np.zeros(3)
         self.pending = list(params.perturbations)

@@ -99,6 +99,9 @@ class ControllerParams:
         friction_step: how far beyond ``μ̂_h`` (the largest friction ratio the hand was seen to
             hold) a motion may explore the hand friction where ``μ̂_h`` leaves it short of its
             margin (:mod:`ccopt.control.targets`); 0 never explores.
+        slide_beyond: how far past its estimated row the statics target puts a ground slide's
+            wrench (N): that row is a face of the forces seen, about a newton inside the true
+            face (median 0.9 N on a closed-loop tour of the paper triangle).
         infeasible_margin: a step whose estimated statics margin is below ``−infeasible_margin`` (N)
             when it starts is not forced: it ends ``infeasible`` with the reason.
         length_unit, angle_unit, force_unit: the units in which the QP weighs its terms and its
@@ -130,6 +133,7 @@ class ControllerParams:
     statics_margin: float = 3.0
     statics_margin_share: float = 0.5
     friction_step: float = 0.1
+    slide_beyond: float = 1.5
     infeasible_margin: float = 1.0
     length_unit: float = 1e-3
     angle_unit: float = math.radians(1.0)

@@ -21,7 +21,8 @@ that keeps the hand sticking short of its margin goal, the target is taken on ``
 if that does better, and says so (:attr:`StaticsTarget.mu_h`): the controller's hand friction rows
 then use it. The hand is asked for at most one step more than it was seen to hold; if it holds, the
 estimate follows and the next step is taken from there; if it does not, it slides at the true
-``μ_h``, which the estimate then learns.
+``μ_h``, which the estimate then learns. Once the hand has been seen sliding where it was
+commanded to (``Estimate.hand_slid``), ``μ̂_h`` was measured at the limit and is not explored beyond.
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ccopt import contact, statics
+from ccopt import contact, modes, statics
 from ccopt.contact import GROUND_ROWS
 from ccopt.estimation.estimator import Estimate
 from ccopt.modes import REMOVED_ROWS, Motion, kept_contacts
@@ -112,12 +113,17 @@ class TargetGoal:
         nominal_force: the normal force preferred where the statics leave a choice (N).
         margin: the margin the regulation wrench keeps where it can (N).
         friction_step: how far beyond ``μ̂_h`` the hand friction may be explored (module docstring).
+        push: how far past its estimated row a ground slide's wrench is put (N): the row is a face
+            of the forces seen, inside the true one (:func:`ccopt.statics.regulation_wrench`'s
+            ``beyond``), so the wrench on it need not slide the object; put past it, the normal
+            force is chosen so that the hand still keeps its margin while pushing there.
     """
 
     force_limits: tuple[float, float]
     nominal_force: float
     margin: float
     friction_step: float = 0.0
+    push: float = 0.0
 
 
 def statics_target(estimate: Estimate, hand_angle: float, motion: Motion, goal: TargetGoal) -> StaticsTarget:
@@ -126,8 +132,8 @@ def statics_target(estimate: Estimate, hand_angle: float, motion: Motion, goal: 
     target = _target(estimate, hand_angle, motion, goal)
     if not (goal.friction_step > 0.0 and target.judged and target.margin < goal.margin):
         return target
-    if not kept_contacts(motion)[0]:
-        return target  # a hand slide: the friction is what it slides at, not to be explored
+    if estimate.hand_slid or not kept_contacts(motion)[0]:
+        return target  # measured where the hand slid; a hand slide slides at it: nothing to explore
     mu_h = estimate.mu_h + goal.friction_step
     bolder = _target(estimate, hand_angle, motion, goal, mu_h)
     if bolder.judged and bolder.margin > target.margin:
@@ -150,6 +156,7 @@ def _target(
         goal.force_limits,
         goal.nominal_force,
         goal.margin,
+        goal.push if modes.kind_of(motion) == "slide_ground" else 0.0,
     )
     if math.isnan(result.margin):
         return UNJUDGED

@@ -89,9 +89,9 @@ class EstimatorParams:
         gravity: the weight's moment about the ground contact.
         theta_filter: filter of ``θ_o`` while it is the hand's angle (flush hand).
         contact_force: the hand is in contact while ``f_n`` exceeds this (N).
-        ground_slid_distance: the estimated ground contact ``s_g`` moving this far (m) one way while
-            the ground is meant to slide that way shows that it slid: only then is that side's hull
-            face its friction face (:class:`GroundSlides`).
+        slid_distance: a contact's estimated position (``s_g``, ``s_h``) moving this far (m) one
+            way while it is meant to slide that way shows that it slid (:class:`SlideEvidence`):
+            only then is that side's hull face the ground's friction face, and ``μ̂_h`` measured.
     """
 
     friction: HandFrictionParams = field(default_factory=HandFrictionParams)
@@ -102,7 +102,7 @@ class EstimatorParams:
     gravity: GravityParams = field(default_factory=GravityParams)
     theta_filter: AngleFilterParams = field(default_factory=AngleFilterParams)
     contact_force: float = 1.0
-    ground_slid_distance: float = 2e-3
+    slid_distance: float = 2e-3
 
     def __post_init__(self) -> None:
         parts = (
@@ -116,7 +116,7 @@ class EstimatorParams:
         )
         validation.check_types((name, getattr(self, name), kind) for name, kind in parts)
         check_number("contact_force", self.contact_force, low_open=False)
-        check_number("ground_slid_distance", self.ground_slid_distance)
+        check_number("slid_distance", self.slid_distance)
 
 
 @dataclass(frozen=True)
@@ -136,7 +136,7 @@ class Estimate:
             normals, 2 offsets in N), rows ``GROUND_SLIDE_POS``, ``GROUND_SLIDE_NEG``.
         mu_g: ground friction coefficient from the two fitted faces (NaN until both are fitted).
         ground_fitted: per ground row, whether it is the ground's friction face: the hull has a
-            straight face on that side *and* the ground slid that way (:class:`GroundSlides`).
+            straight face on that side *and* the ground slid that way (:class:`SlideEvidence`).
             Otherwise the row is where the sticking forces seen end (a face of the data, or the
             conservative prior row): a bound the classifier respects, but not the friction limit,
             so the statics of a motion (:mod:`ccopt.control.targets`) do not count it as one.
@@ -158,6 +158,8 @@ class Estimate:
             ``θ_h − θ_o = c τ`` (rad/(N·m), :mod:`.kinematics`), and its standard deviation.
         gravity: ``M̂(θ)``, the weight's moment about the ground contact, with its covariance
             (:class:`~ccopt.estimation.gravity.GravityEstimate`).
+        hand_slid: whether the hand has been seen sliding where it was commanded to
+            (:class:`SlideEvidence`): ``mu_h`` was then measured at the friction limit.
     """
 
     time: float
@@ -190,6 +192,7 @@ class Estimate:
     compliance: float = math.nan
     compliance_std: float = math.nan
     gravity: GravityEstimate = UNKNOWN_GRAVITY
+    hand_slid: bool = False
 
     @property
     def kinematics_valid(self) -> bool:
@@ -222,7 +225,8 @@ class Estimator:
         self.kinematics = KinematicEstimator(self.hand.half_length, self.params.kinematics)
         self.theta_filter = AngleFilter(self.params.theta_filter)
         self.gravity = GravityEstimator(self.params.gravity)
-        self.ground_slides = GroundSlides(self.params.ground_slid_distance)
+        self.ground_slides = SlideEvidence(self.params.slid_distance)
+        self.hand_slides = SlideEvidence(self.params.slid_distance)
         self._cone_input = np.zeros(12)
         self._cone_ground: GroundCone | None = None
         self._last: Estimate | None = None
@@ -298,7 +302,8 @@ class Estimator:
             *parts,
             rough=self._rough(theta_o, kinematics),
             gravity=gravity,
-            slid=self.ground_slides.update(kinematics.s_g, _ground_sliding_way(commanded, kinematics)),
+            slid=self._slid(commanded, kinematics),
+            hand_slid=any(self.hand_slides.slid),
         )
         return self._last
 
@@ -328,50 +333,61 @@ class Estimator:
         rows = 3 * N_CONE_ROWS
         return out[:rows].reshape(3, N_CONE_ROWS).T, out[rows : rows + N_CONE_ROWS], out[rows + N_CONE_ROWS :]
 
+    def _slid(
+        self, commanded: ContactConfiguration | None, kinematics: KinematicEstimate
+    ) -> tuple[bool, bool]:
+        """Update the slide evidence of both contacts; the ways the ground slid. Without a command
+        the ground counts while the kinematics let it move; the hand does not count."""
+        hand = commanded.hand_mode if commanded is not None else None
+        ground = commanded.ground_mode if commanded is not None else None
+        self.hand_slides.update(kinematics.s_h, _sliding_way(hand))
+        free = None if not kinematics.ground_fixed else 0
+        return self.ground_slides.update(kinematics.s_g, _sliding_way(ground, free))
+
     def _skip(self, time: float) -> Estimate:
         if self._last is None:
             return _empty_estimate(time, self.friction, self.ground)
         return dataclasses.replace(self._last, time=float(time), skipped=True)
 
 
-def _ground_sliding_way(commanded: ContactConfiguration | None, kinematics: KinematicEstimate) -> int | None:
-    """The way the ground contact is meant to slide: ``±1`` as commanded, 0 if it is meant to stick;
-    without a command, either way (None) while the kinematics let it move, else 0. Not the reports:
-    a hull edge the data merely end at is reported as a face, the kinematics then follow the ground
-    (a cheap false alarm for them), and a pivot's rotation through a slightly wrong ``d`` would pass
-    for a slide."""
-    if commanded is not None:
-        return int(commanded.ground_mode)
-    return 0 if kinematics.ground_fixed else None
+def _sliding_way(commanded: ContactMode | None, fallback: int | None = 0) -> int | None:
+    """The way a contact is meant to slide: ``±1`` as commanded, 0 if it is meant to stick, and
+    ``fallback`` without a command (None: either way). Not the reports: a hull edge the data merely
+    end at is reported as a face, the kinematics then follow the ground (a cheap false alarm for
+    them), and a pivot's rotation through a slightly wrong ``d`` would pass for a slide."""
+    return int(commanded) if commanded is not None else fallback
 
 
-class GroundSlides:
-    """Which ways the ground has been seen sliding: while it is meant to slide one way
-    (:func:`_ground_sliding_way`), the estimated ``s_g`` moved by at least ``distance`` (m) that
-    way. Only then is that side's hull face the friction face; before, it is merely where the data
-    end (e.g. the hand forces of pivots at a tilted hand lie along a straight edge of the hull that
-    looks like a face). The way counts: when the kinematics start following a sliding ground,
-    ``ŝ_g`` first jumps by up to a millimetre either way.
+class SlideEvidence:
+    """Which ways a contact has been seen sliding: while it is meant to slide one way
+    (:func:`_sliding_way`), its estimated position (``s_g`` or ``s_h``) moved by at least
+    ``distance`` (m) that way. The way counts: when the kinematics start following a sliding
+    ground, ``ŝ_g`` first jumps by up to a millimetre either way.
+
+    Only on a side the ground slid is the hull face the ground's friction face; before, it is
+    merely where the data end (e.g. the hand forces of pivots at a tilted hand lie along a straight
+    edge of the hull that looks like a face). Once the hand has slid, ``μ̂_h`` was measured at its
+    limit and is no longer a bound to explore beyond.
     """
 
     def __init__(self, distance: float) -> None:
         self.distance = check_number("distance", distance)
         self.slid = [False, False]
-        """Per ground row (``GROUND_SLIDE_POS``: ``+x``, ``GROUND_SLIDE_NEG``: ``−x``)."""
-        self._start = math.nan  # s_g where the ground was last let move
+        """Per way: ``[+, −]`` (for the ground, rows ``GROUND_SLIDE_POS``, ``GROUND_SLIDE_NEG``)."""
+        self._start = math.nan  # the position where the contact was last let move
 
-    def update(self, s_g: float, way: int | None) -> tuple[bool, bool]:
-        """Advance with the current ``s_g`` estimate (m, NaN if unknown) and the way the ground is
+    def update(self, position: float, way: int | None) -> tuple[bool, bool]:
+        """Advance with the current position estimate (m, NaN if unknown) and the way the contact is
         meant to slide (``±1``, 0 not at all, None either way); the ways seen so far."""
-        if way == 0 or not math.isfinite(s_g):
+        if way == 0 or not math.isfinite(position):
             self._start = math.nan
         elif math.isnan(self._start):
-            self._start = s_g
+            self._start = position
         else:
-            moved = s_g - self._start
+            moved = position - self._start
             if abs(moved) >= self.distance and (way is None or moved * way > 0.0):
                 self.slid[0 if moved > 0.0 else 1] = True
-                self._start = s_g
+                self._start = position
         return self.slid[0], self.slid[1]
 
 
@@ -453,6 +469,7 @@ def _assemble(
     rough: tuple[tuple[float, ...], tuple[float, ...]] = ((math.nan,) * 4, (math.nan,) * 4),
     gravity: GravityEstimate = UNKNOWN_GRAVITY,
     slid: tuple[bool, bool] = (False, False),
+    hand_slid: bool = False,
 ) -> Estimate:
     """An :class:`Estimate` from its parts (its arrays made read-only); ``rough`` is
     ``(kinematics_mean, kinematics_std)``, ``slid`` the ways the ground was seen sliding."""
@@ -482,6 +499,7 @@ def _assemble(
         kinematics_mean=rough[0],
         kinematics_std=rough[1],
         gravity=gravity,
+        hand_slid=hand_slid,
     )
 
 

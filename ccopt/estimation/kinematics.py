@@ -46,8 +46,8 @@ ground sticks, hand flush          eq. 15 (and eq. 16 if the hand sticks, so ``s
                                    added when the hand has rotated ``excitation_angle`` since the
                                    last sample; while the hand slides ``s_h`` is released and
                                    eq. 16 re-estimates it every sample
-ground slides, hand sticks, flush  ``r_o`` released and both rows used every sample: ``r_o`` moves
-                                   rigidly with the hand with the last ``d`` and ``s_h``
+ground slides, hand sticks, flush  ``x_o`` released and both rows used every sample: ``r_o`` moves
+                                   rigidly with the hand (the object keeps its height)
 ground *may* slide (reported, but  as if it sticks, until an innovation exceeds ``slip_gate``
 not acted on), hand flush          standard deviations (eq. 15, and eq. 16 if the hand sticks); then,
                                    until the ground is reported sticking again, rigidly (hand
@@ -380,11 +380,14 @@ class KinematicEstimator:
         return not self._within(self._predict(row, value), self._slip_gate_squared)
 
     def _follow_ground(self, pose: list[float], frame: _Frame, hand_sticks: bool) -> None:
-        """Ground sliding, hand flush: ``r_o`` follows the hand rigidly (hand sticking, the paper's
-        case), or, with the hand sliding too, ``x_o`` and ``s_h`` both change (the object keeps its
-        height on a flat ground) and eqs. 15–16 give both."""
+        """Ground sliding, hand flush: the object keeps its height on a flat ground, so only ``x_o``
+        changes (hand sticking, the paper's case: ``r_o`` follows the hand rigidly) or ``x_o`` and
+        ``s_h`` both (hand sliding too); eqs. 15–16 give them. Keeping ``y_o`` also lets a sticking
+        hand's ``s_h`` be found again after a moment out of contact (a slide's start can lift the
+        object off the hand for 10 ms), which releasing ``y_o`` too would leave unobservable until
+        the next pivots."""
         if hand_sticks:
-            self._release(X_O, Y_O)
+            self._release(X_O)
         else:
             self._release(X_O, S_H)
         self._measure_normal(pose, frame)

@@ -48,11 +48,15 @@ class GraphParams:
     min_margin: float = 1.0
 
     def __post_init__(self) -> None:
+        for name in ("pivot_step", "s_h_step", "ground_slide"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise ValueError(f"graph steps must be positive and finite: {name} = {value!r}")
         ratio = self.hand_slide / self.s_h_step
-        if not (self.pivot_step > 0 and self.s_h_step > 0 and self.ground_slide > 0):
-            raise ValueError("graph steps must be positive")
-        if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
+        if not math.isfinite(ratio) or abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
             raise ValueError(f"hand_slide must be a multiple of s_h_step, got {self.hand_slide!r}")
+        if not math.isfinite(self.min_margin):
+            raise ValueError(f"min_margin must be a finite number of N, got {self.min_margin!r}")
         if not (self.theta_range[0] < self.theta_range[1] and self.s_h_range[0] <= self.s_h_range[1]):
             raise ValueError(f"empty ranges: θ {self.theta_range}, s_h {self.s_h_range}")
 

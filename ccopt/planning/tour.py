@@ -30,6 +30,8 @@ if TYPE_CHECKING:
     from ccopt.closed_loop import LoopParams
 
 SLIDE_KINDS = ("slide_hand", "slide_ground")
+_DETOUR = 1000.0
+"""Route cost of a hand slide on the way to another slide, in pivots: any number of pivots first."""
 
 
 @dataclass(frozen=True)
@@ -107,13 +109,18 @@ def possible_tour(
             for sign in (way[kind], -way[kind]):
                 if kind == "slide_ground" and abs(s_g + sign * graph.params.ground_slide) > ground_span:
                     continue
-                route = _route_to_slide(graph, node, kind, sign)
+                hand_way = way["slide_hand"] if done["slide_hand"] < slides else 0
+                route = _route_to_slide(graph, node, kind, sign, hand_way)
                 if route is None:
                     continue
                 edges.extend(route)
                 node = route[-1].target
                 if kind == "slide_ground":
                     s_g += route[-1].delta
+                for edge in route[:-1]:  # a hand slide on the way counts as one of the tour's
+                    if edge.kind == "slide_hand":
+                        done["slide_hand"] += 1
+                        way["slide_hand"] = -way["slide_hand"]
                 done[kind] += 1
                 way[kind] = -sign
                 progressed = True
@@ -140,15 +147,23 @@ def _explorable(graph: ConfigurationGraph) -> bool:
     return ways == {1, -1}
 
 
-def _route_to_slide(graph: ConfigurationGraph, source: Node, kind: str, sign: int) -> list[Edge] | None:
-    """Pivots and hand slides to the nearest node with a slide of ``kind`` and ``sign``, then the slide."""
+def _route_to_slide(
+    graph: ConfigurationGraph, source: Node, kind: str, sign: int, hand_way: int
+) -> list[Edge] | None:
+    """Pivots to the nearest node with a slide of ``kind`` and ``sign``, then the slide; a hand slide
+    on the way only in ``hand_way`` (0: none), and only where pivots alone do not get there."""
 
     def slide_from(node: Node) -> Edge | None:
         return next(
             (e for e in graph.edges(node) if e.kind == kind and math.copysign(1, e.delta) == sign), None
         )
 
-    path = graph.shortest_path(source, lambda node: slide_from(node) is not None)
+    def cost(edge: Edge) -> float:
+        if edge.kind == "pivot":
+            return 1.0
+        return _DETOUR if math.copysign(1, edge.delta) == hand_way else math.inf
+
+    path = graph.shortest_path(source, lambda node: slide_from(node) is not None, cost)
     if path is None:
         return None
     end = path[-1].target if path else source
@@ -193,6 +208,15 @@ def plan_tour(
     start) keeps ``margin`` (N) with a normal force within ``force_share`` of the hand's range and
     the estimate's torque lever: headroom for what the statics ignore (the contacts' compliance, the
     dynamics). Uses the true object: never for the estimator or the controller."""
+    if not (math.isfinite(margin) and margin >= 0.0):
+        raise ValueError(f"margin must be a non-negative number of N, got {margin!r}")
+    if not 0.0 < force_share <= 1.0:
+        raise ValueError(f"force_share must be in (0, 1] of the hand's force range, got {force_share!r}")
+    if not angle_range[0] < angle_range[1]:
+        raise ValueError(f"empty ranges: the reach {angle_range}")
+    if not angle_range[0] <= params.start.theta_o <= angle_range[1]:
+        low, high, start = (math.degrees(v) for v in (*angle_range, params.start.theta_o))
+        raise ValueError(f"the start tilt {start:.1f}° is outside the reach [{low:.1f}°, {high:.1f}°]")
     base = dataclasses.replace(params.start, s_h=0.0)
     low, high = placement.face_s_h_range(obj, base)
     inset = params.hand.half_length + 2e-3
@@ -217,7 +241,7 @@ def plan_tour(
             continue  # the run could not even hold its start comfortably
         tour = possible_tour(graph, **tour_options)
         slides = sum(min(tour.counts[kind], wanted) for kind in SLIDE_KINDS)
-        score = (slides, min((edge.margin for edge in tour.edges), default=math.inf))
+        score = (slides, min((edge.margin for edge in tour.edges), default=-math.inf))
         if best is None or score > best[0]:
             best = (score, trial, tour)
     if best is None:
