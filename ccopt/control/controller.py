@@ -338,7 +338,7 @@ class Controller:
         bounds = np.concatenate([state.cone_bounds - margins, [f_max, -f_min]])
         active = np.concatenate([modes.kept_rows(command.motion) & state.row_valid, [True, True]])
         units = self._units  # the QP's variable y is the step in task units: Δx = units · y
-        return QPInstance(
+        return QPInstance.unchecked(  # well formed by construction: no per-tick checks
             stiffness=wrench_map * units,
             wrench=np.asarray(state.wrench, dtype=float),
             rows=rows,

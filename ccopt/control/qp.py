@@ -89,6 +89,7 @@ for _name, _shape in _LAYOUT:
     _offset += _size
 N_PARAMETERS = _offset
 """Length of the packed parameter vector of the compiled solver."""
+_FIELDS = tuple(name for name, _ in _LAYOUT)
 
 
 @dataclass(frozen=True)
@@ -136,6 +137,30 @@ class QPInstance:
             raise ValueError(f"weights must be non-negative, got {self.weights!r}")
         object.__setattr__(self, "packed", _pack(self, n_rows, n_terms))
 
+    @classmethod
+    def unchecked(
+        cls,
+        stiffness: np.ndarray,
+        wrench: np.ndarray,
+        rows: np.ndarray,
+        bounds: np.ndarray,
+        gains: np.ndarray,
+        active: np.ndarray,
+        regularization: float,
+        directions: np.ndarray,
+        weights: np.ndarray,
+        targets: np.ndarray,
+    ) -> QPInstance:
+        """The instance of these fields (NumPy arrays of the shapes above) without the constructor's
+        checks: for a producer whose instances are well formed by construction, the controller once a
+        tick (its inputs were checked where they entered). Anything else should use the constructor."""
+        instance = object.__new__(cls)
+        fields = (stiffness, wrench, rows, bounds, gains, active, regularization)
+        for name, value in zip(_FIELDS, (*fields, directions, weights, targets), strict=True):
+            object.__setattr__(instance, name, value)
+        object.__setattr__(instance, "packed", _pack(instance, len(rows), len(directions)))
+        return instance
+
 
 def _check_matrix(name: str, value: ArrayLike, max_rows: int, cols: int) -> int:
     shape = np.shape(value)
@@ -154,29 +179,22 @@ def _check_vector(name: str, value: ArrayLike, length: int) -> None:
 
 
 def _pack(instance: QPInstance, n_rows: int, n_terms: int) -> np.ndarray:
+    """The packed parameter vector: each field in its slot of :data:`_LAYOUT`, column-major like
+    CasADi, a ``(count, ...)`` block in the first ``count`` rows of its ``(MAX, ...)`` slot (zeros
+    after)."""
     packed = np.zeros(N_PARAMETERS)
-
-    def put(name: str, value: ArrayLike, count: int | None = None) -> None:
-        view = packed[_SLICES[name]]
-        flat = np.asarray(value, dtype=float).reshape(-1, order="F")
-        if count is None:
-            view[:] = flat
-        else:  # a (count, ...) block into a (MAX, ...) slot, column-major like CasADi
-            shape = dict(_LAYOUT)[name]
-            block = np.zeros(shape)
-            block[:count] = np.asarray(value, dtype=float)
-            view[:] = block.reshape(-1, order="F")
-
-    put("stiffness", instance.stiffness)
-    put("wrench", instance.wrench)
-    put("rows", instance.rows, n_rows)
-    put("bounds", instance.bounds, n_rows)
-    put("gains", instance.gains, n_rows)
-    put("active", np.asarray(instance.active, dtype=float), n_rows)
-    put("regularization", instance.regularization)
-    put("directions", instance.directions, n_terms)
-    put("weights", instance.weights, n_terms)
-    put("targets", instance.targets, n_terms)
+    packed[_SLICES["stiffness"]] = np.ravel(instance.stiffness, order="F")
+    packed[_SLICES["wrench"]] = instance.wrench
+    packed[_SLICES["regularization"]] = instance.regularization
+    for name, count, limit in (("rows", n_rows, MAX_ROWS), ("directions", n_terms, MAX_TERMS)):
+        # the (limit, 3) slot column-major is a (3, limit) block row-major: its first columns
+        packed[_SLICES[name]].reshape(3, limit)[:, :count] = np.transpose(getattr(instance, name))
+    for name, count in (("bounds", n_rows), ("gains", n_rows), ("active", n_rows)):
+        start = _SLICES[name].start
+        packed[start : start + count] = getattr(instance, name)
+    for name in ("weights", "targets"):
+        start = _SLICES[name].start
+        packed[start : start + n_terms] = getattr(instance, name)
     return packed
 
 
