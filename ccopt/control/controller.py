@@ -259,7 +259,14 @@ def quasi_static_maps(
     ``P = K (I − V A)`` (see the module docstring)."""
     coupling = balance @ stiffness
     motion_map = np.linalg.solve(coupling @ free_directions, coupling)
-    return motion_map, stiffness @ (np.eye(3) - free_directions @ motion_map)
+    return motion_map, stiffness @ (_IDENTITY - free_directions @ motion_map)
+
+
+_IDENTITY = np.eye(3)
+_IDENTITY.flags.writeable = False
+_FORCE_ROWS = np.array([[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]])
+"""The normal-force limits' rows ``f_n ≤ f_max``, ``−f_n ≤ −f_min`` after the cone rows."""
+_FORCE_ROWS.flags.writeable = False
 
 
 class Controller:
@@ -341,7 +348,7 @@ class Controller:
             terms.add((row @ wrench_map) / scale, p.push_weight, self._force_gain * excess / scale)
         margins = self._margins(f_n, state)
         f_min, f_max = self.hand.force_limits
-        rows = np.vstack([state.cone_rows, [[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]]])
+        rows = np.concatenate([state.cone_rows, _FORCE_ROWS])
         bounds = np.concatenate([state.cone_bounds - margins, [f_max - p.force_headroom, -f_min]])
         active = np.concatenate([modes.kept_rows(command.motion) & state.row_valid, [True, True]])
         units = self._units  # the QP's variable y is the step in task units: Δx = units · y
@@ -382,14 +389,9 @@ class Controller:
         """Per-row margins ``b − margin``: strict inequalities for the rows the command keeps."""
         p = self.params
         force = max(f_n, 0.0)
-        mu_h = state.mu_h
-        margins = np.full(N_CONE_ROWS, p.ground_margin)
-        margins[[Row.HAND_SLIDE_POS, Row.HAND_SLIDE_NEG]] = max(
-            p.friction_margin * mu_h * force, p.min_margin
-        )
-        margins[[Row.HAND_PIVOT_POS, Row.HAND_PIVOT_NEG]] = (
-            max(p.torque_margin * force, p.min_margin) * state.l_h
-        )
+        slide = max(p.friction_margin * state.mu_h * force, p.min_margin)
+        pivot = max(p.torque_margin * force, p.min_margin) * state.l_h
+        margins = np.array([slide, slide, pivot, pivot, p.ground_margin, p.ground_margin])  # Row order
         if state.statics_margin is not None and math.isfinite(state.statics_margin):
             # the statics' wrench keeps this margin on every row (N; torque rows over l_h): keep the
             # QP's rows no stricter, so that the QP can reach it, but never below half their own

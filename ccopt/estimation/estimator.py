@@ -30,6 +30,7 @@ hand_wrench)`` can be replayed with :func:`replay`.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
@@ -246,7 +247,7 @@ class Estimator:
         Raises ``TypeError`` or ``ValueError`` (and changes nothing) unless ``time`` is a real
         number and the pose and wrench are three numbers each, all within the float range.
         """
-        if not isinstance(time, Real):
+        if type(time) is not float and not isinstance(time, Real):
             raise TypeError(f"time must be a real number, got {type(time).__name__} {time!r}")
         try:
             time = float(time)
@@ -262,11 +263,12 @@ class Estimator:
         if not all(map(float.__ge__, SAMPLE_BOUNDS, map(abs, values))):  # also False for NaN
             return self._skip(time)
         theta_h, f_n, f_t = values[3], values[4], values[5]
-        e_n, e_t = geometry.hand_normal(theta_h).tolist(), geometry.hand_tangent(theta_h).tolist()
+        axes = geometry.hand_axes(theta_h)
+        e_n, e_t = axes
         in_contact = f_n > self.params.contact_force
         if in_contact:
             self.friction.update(f_n, f_t)
-            self.ground.update(time, geometry.hand_force_to_world(theta_h, f_n, f_t))
+            self.ground.update(time, geometry.hand_to_world(axes, f_n, f_t))
         friction, ground = self.friction, self.ground.cone
         cone_rows, cone_bounds, margins = self._cone(theta_h, friction.mu_h, friction.l_h_eff, ground, wrench)
         valid = [friction.valid, friction.valid, True, True, ground.valid, ground.valid]  # order: Row
@@ -391,6 +393,7 @@ class SlideEvidence:
         return self.slid[0], self.slid[1]
 
 
+@functools.cache  # 27 × 10 configurations: each case is made once
 def commanded_modes(
     modes: ContactConfiguration, commanded: ContactConfiguration | None
 ) -> ContactConfiguration:
