@@ -47,11 +47,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from operator import truediv
 
 import numpy as np
 
 from ccopt import contact, modes, validation
-from ccopt.contact import N_CONE_ROWS, Row
+from ccopt.contact import N_CONE_ROWS
 from ccopt.control.qp import QPInstance, QPSolution, QPSolver, make_solver
 from ccopt.hand import Hand
 from ccopt.modes import Motion
@@ -229,13 +230,6 @@ class ControlOutput:
     instance: QPInstance
 
 
-def _row_units(lever: float) -> np.ndarray:
-    """Per-row factor turning a margin in N into the row's units (torque rows: × ``l_h``)."""
-    scale = np.ones(N_CONE_ROWS)
-    scale[[Row.HAND_PIVOT_POS, Row.HAND_PIVOT_NEG]] = lever
-    return scale
-
-
 class _Terms:
     """The tracking terms ``α (dᵀΔx − δ)²`` of one QP, collected in order."""
 
@@ -258,7 +252,11 @@ def quasi_static_maps(
     in equilibrium again, with ``E Δw = 0`` for the equilibrium rows ``E`` (k×3): ``A = (E K V)⁻¹ E K``,
     ``P = K (I − V A)`` (see the module docstring)."""
     coupling = balance @ stiffness
-    motion_map = np.linalg.solve(coupling @ free_directions, coupling)
+    reduced = coupling @ free_directions
+    if reduced.shape == (1, 1):  # one free direction: LAPACK's 1×1 solve, bit for bit, without its overhead
+        motion_map = coupling * (1.0 / reduced.item())
+    else:
+        motion_map = np.linalg.solve(reduced, coupling)
     return motion_map, stiffness @ (_IDENTITY - free_directions @ motion_map)
 
 
@@ -267,6 +265,8 @@ _IDENTITY.flags.writeable = False
 _FORCE_ROWS = np.array([[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]])
 """The normal-force limits' rows ``f_n ≤ f_max``, ``−f_n ≤ −f_min`` after the cone rows."""
 _FORCE_ROWS.flags.writeable = False
+_FORCE_ACTIVE = np.ones(2, dtype=bool)
+_FORCE_ACTIVE.flags.writeable = False
 
 
 class Controller:
@@ -295,6 +295,9 @@ class Controller:
         self._convergence = 1.0 - math.exp(-self.params.convergence_rate * self.period)
         self._force_gain = 1.0 - math.exp(-self.params.force_rate * self.period)
         self._max_step = np.asarray(self.params.max_speed) * self.period
+        self._max_step_list = self._max_step.tolist()
+        f_min, f_max = self.hand.force_limits
+        self._force_bounds = np.array([f_max - self.params.force_headroom, -f_min])
         p = self.params
         self._units = np.array([p.length_unit, p.length_unit, p.angle_unit])
         self._row_gains = np.full(N_CONE_ROWS + 2, self.params.row_gains)
@@ -310,7 +313,7 @@ class Controller:
         instance = self.build_instance(state, command)
         solution = self.solver.solve(instance)
         step = self._units * solution.step  # the QP's variable is the step in task units
-        excess = np.max(np.abs(step) / self._max_step)
+        excess = max(map(truediv, map(abs, step.tolist()), self._max_step_list))
         step = step / excess if excess > 1.0 else step  # scaled, not clipped: the step keeps its
         # direction, and with it the balance of the wrench it predicts
         return ControlOutput(step=step, solution=solution, instance=instance)
@@ -347,10 +350,9 @@ class Controller:
             excess = state.cone_bounds[removed[0]] + p.push_force - float(row @ state.wrench)
             terms.add((row @ wrench_map) / scale, p.push_weight, self._force_gain * excess / scale)
         margins = self._margins(f_n, state)
-        f_min, f_max = self.hand.force_limits
-        rows = np.concatenate([state.cone_rows, _FORCE_ROWS])
-        bounds = np.concatenate([state.cone_bounds - margins, [f_max - p.force_headroom, -f_min]])
-        active = np.concatenate([modes.kept_rows(command.motion) & state.row_valid, [True, True]])
+        rows = np.concatenate((state.cone_rows, _FORCE_ROWS))
+        bounds = np.concatenate((state.cone_bounds - margins, self._force_bounds))
+        active = np.concatenate((modes.kept_rows(command.motion) & state.row_valid, _FORCE_ACTIVE))
         units = self._units  # the QP's variable y is the step in task units: Δx = units · y
         return QPInstance.unchecked(  # well formed by construction: no per-tick checks
             stiffness=wrench_map * units,
@@ -391,10 +393,12 @@ class Controller:
         force = max(f_n, 0.0)
         slide = max(p.friction_margin * state.mu_h * force, p.min_margin)
         pivot = max(p.torque_margin * force, p.min_margin) * state.l_h
-        margins = np.array([slide, slide, pivot, pivot, p.ground_margin, p.ground_margin])  # Row order
+        ground = p.ground_margin
         if state.statics_margin is not None and math.isfinite(state.statics_margin):
             # the statics' wrench keeps this margin on every row (N; torque rows over l_h): keep the
             # QP's rows no stricter, so that the QP can reach it, but never below half their own
-            share = p.statics_margin_share * state.statics_margin * _row_units(state.l_h)
-            margins = np.maximum(np.minimum(margins, share), 0.5 * margins)
-        return margins
+            share = p.statics_margin_share * state.statics_margin
+            slide = max(min(slide, share), 0.5 * slide)
+            pivot = max(min(pivot, share * state.l_h), 0.5 * pivot)
+            ground = max(min(ground, share), 0.5 * ground)
+        return np.array((slide, slide, pivot, pivot, ground, ground))  # Row order

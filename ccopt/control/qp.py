@@ -183,19 +183,28 @@ def _pack(instance: QPInstance, n_rows: int, n_terms: int) -> np.ndarray:
     CasADi, a ``(count, ...)`` block in the first ``count`` rows of its ``(MAX, ...)`` slot (zeros
     after)."""
     packed = np.zeros(N_PARAMETERS)
-    packed[_SLICES["stiffness"]] = np.ravel(instance.stiffness, order="F")
-    packed[_SLICES["wrench"]] = instance.wrench
-    packed[_SLICES["regularization"]] = instance.regularization
-    for name, count, limit in (("rows", n_rows, MAX_ROWS), ("directions", n_terms, MAX_TERMS)):
-        # the (limit, 3) slot column-major is a (3, limit) block row-major: its first columns
-        packed[_SLICES[name]].reshape(3, limit)[:, :count] = np.transpose(getattr(instance, name))
-    for name, count in (("bounds", n_rows), ("gains", n_rows), ("active", n_rows)):
-        start = _SLICES[name].start
-        packed[start : start + count] = getattr(instance, name)
-    for name in ("weights", "targets"):
-        start = _SLICES[name].start
-        packed[start : start + n_terms] = getattr(instance, name)
+    # a (rows, 3) slot column-major is a (3, rows) block row-major: the transposed field fills it
+    packed[_STIFFNESS].reshape(3, 3)[...] = np.asarray(instance.stiffness).T
+    packed[_WRENCH] = instance.wrench
+    packed[_REGULARIZATION] = instance.regularization
+    packed[_ROWS].reshape(3, MAX_ROWS)[:, :n_rows] = np.asarray(instance.rows).T
+    packed[_DIRECTIONS].reshape(3, MAX_TERMS)[:, :n_terms] = np.asarray(instance.directions).T
+    start = _SLICES["bounds"].start
+    packed[start : start + n_rows] = instance.bounds
+    start = _SLICES["gains"].start
+    packed[start : start + n_rows] = instance.gains
+    start = _SLICES["active"].start
+    packed[start : start + n_rows] = instance.active
+    start = _SLICES["weights"].start
+    packed[start : start + n_terms] = instance.weights
+    start = _SLICES["targets"].start
+    packed[start : start + n_terms] = instance.targets
     return packed
+
+
+_STIFFNESS, _WRENCH, _ROWS, _DIRECTIONS, _REGULARIZATION = (
+    _SLICES[name] for name in ("stiffness", "wrench", "rows", "directions", "regularization")
+)
 
 
 @dataclass(frozen=True)
