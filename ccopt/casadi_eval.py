@@ -86,6 +86,15 @@ class BufferedFunction:
         binding.evaluate()
         return tuple(out.copy(order="C") for out in binding.shaped_outputs)
 
+    def call_scalars(self, *values: float) -> np.ndarray:
+        """Fast path for functions of scalar inputs: output 0 (a fresh array, shaped as
+        :meth:`__call__` returns it) of one number per input (not checked)."""
+        binding = self.buffers()
+        for flat, value in zip(binding.flat_inputs, values, strict=True):
+            flat[0] = value
+        binding.evaluate()
+        return binding.shaped_outputs[0].copy()
+
     def call_flat(self, flat_input: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """Fast path for one-input, one-output functions: copy ``flat_input`` in, return output 0.
 

@@ -102,9 +102,8 @@ def hand_frame(theta_h: float | ca.SX | ca.MX) -> Array | ca.SX | ca.MX:
 
 def planar_hand_to_world(theta_h: float) -> Array:
     """3×3 map of hand-frame ``(n, t, θ)`` vectors (forces/torque or displacements) to world ``(x, y, θ)``."""
-    out = np.eye(3)
-    out[:2, :2] = hand_frame(theta_h)
-    return out
+    (nx, ny), (tx, ty) = hand_axes(theta_h)
+    return np.array(((nx, tx, 0.0), (ny, ty, 0.0), (0.0, 0.0, 1.0)))
 
 
 def wrench_hand_to_world(theta_h: float, wrench_hand: ArrayLike) -> Array:

@@ -325,7 +325,8 @@ class Controller:
         s_h, d = (state.s_h, state.d) if state.kinematics_valid else (0.0, p.d_guess)
         vectors = contact.admissible_motions(state.hand_angle, s_h, d)
         free, balance = self._model(state, command, vectors)
-        motion_map, wrench_map = quasi_static_maps(stiffness, vectors[:, free], balance)
+        free_directions = vectors[:, :1] if len(free) == 1 else vectors[:, free]  # θ_o is column 0
+        motion_map, wrench_map = quasi_static_maps(stiffness, free_directions, balance)
         errors = np.asarray(command.targets) - np.asarray(state.coordinates)
         regulated = modes.driven_coordinate(command.motion)
         terms = _Terms()
@@ -333,7 +334,7 @@ class Controller:
             unit = p.angle_unit if k == modes.THETA_O else p.length_unit
             weight = p.weights[k] if k == regulated else p.hold_weights[k]
             terms.add(motion_map[row] / unit, weight, self._convergence * errors[k] / unit)
-        f_n = state.wrench[0]
+        f_n = float(state.wrench[0])
         force_target = p.normal_force if state.force_target is None else state.force_target
         change = self._force_gain * (force_target - f_n)
         terms.add(wrench_map[0] / p.force_unit, p.force_weight, change / p.force_unit)
@@ -376,16 +377,15 @@ class Controller:
         slide's coordinate joins once the slide has begun (moved by ``slide_onset`` the commanded way
         since the step began), held on its friction boundary by the removed row.
         """
-        free, balance = [modes.THETA_O], [vectors[:, modes.THETA_O]]
-        driven = modes.driven_coordinate(command.motion)
         removed = modes.REMOVED_ROWS[command.motion]
         if removed and command.start is not None:
+            driven = modes.driven_coordinate(command.motion)
             delta = command.targets[driven] - command.start[driven]
             progress = (state.coordinates[driven] - command.start[driven]) * math.copysign(1.0, delta)
             if progress >= self.params.slide_onset:
-                free.append(driven)
-                balance.append(state.cone_rows[removed[0]])
-        return free, np.asarray(balance)
+                balance = np.array((vectors[:, modes.THETA_O], state.cone_rows[removed[0]]))
+                return [modes.THETA_O, driven], balance
+        return [modes.THETA_O], vectors[:, modes.THETA_O : modes.THETA_O + 1].T
 
     def _margins(self, f_n: float, state: ControlInput) -> np.ndarray:
         """Per-row margins ``b − margin``: strict inequalities for the rows the command keeps."""
