@@ -205,20 +205,23 @@ def control_input(
 ) -> ControlInput:
     """What the controller reads from an estimate, the measured hand pose, the progress source and the
     estimated statics' target (with the hand friction it explores, if any: :mod:`ccopt.control.targets`)."""
-    values = {name: getattr(estimate, name) for name in _FROM_ESTIMATE if name != "row_valid"}
+    values = {name: getattr(estimate, name) for name in _FROM_ESTIMATE}
     if target.mu_h is not None:
         values["cone_rows"] = contact.with_hand_friction(estimate.cone_rows, target.mu_h)
         values["mu_h"] = target.mu_h
-    return ControlInput(
-        **values,
-        row_valid=enforced_rows(estimate),
-        l_h=estimate.torque_lever,
-        hand_angle=float(hand_pose[2]),
-        kinematics_valid=kinematics_usable(estimate),
-        coordinates=coordinates,
-        force_target=target.force,
-        tangential_target=target.tangential,
-        statics_margin=target.margin if target.force is not None else None,
+    values["row_valid"] = enforced_rows(estimate)
+    return validation.trusted(  # every field, each well formed by construction
+        ControlInput,
+        {
+            **values,
+            "l_h": estimate.torque_lever,
+            "hand_angle": float(hand_pose[2]),
+            "kinematics_valid": kinematics_usable(estimate),
+            "coordinates": coordinates,
+            "force_target": target.force,
+            "tangential_target": target.tangential,
+            "statics_margin": target.margin if target.force is not None else None,
+        },
     )
 
 

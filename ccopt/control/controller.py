@@ -316,7 +316,7 @@ class Controller:
         excess = max(map(truediv, map(abs, step.tolist()), self._max_step_list))
         step = step / excess if excess > 1.0 else step  # scaled, not clipped: the step keeps its
         # direction, and with it the balance of the wrench it predicts
-        return ControlOutput(step=step, solution=solution, instance=instance)
+        return validation.trusted(ControlOutput, {"step": step, "solution": solution, "instance": instance})
 
     def build_instance(self, state: ControlInput, command: Command) -> QPInstance:
         """The QP of this tick (exposed for studies and tests)."""

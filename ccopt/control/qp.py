@@ -43,6 +43,7 @@ import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ccopt import validation
 from ccopt.casadi_eval import BufferedFunction
 
 MAX_ROWS = 10
@@ -305,12 +306,15 @@ def build_qp_function(plugin: str = "daqp") -> ca.Function:
 def _solution(z: np.ndarray, instance: QPInstance, backend: str) -> QPSolution:
     step = z[:3].copy()  # z may be a solver's reusable output buffer
     slack = max(float(z[3]), 0.0)
-    return QPSolution(
-        step=step,
-        wrench_change=np.asarray(instance.stiffness) @ step,
-        slack=slack,
-        feasible=slack <= INFEASIBLE_SLACK,
-        backend=backend,
+    return validation.trusted(  # every field, each well formed by construction
+        QPSolution,
+        {
+            "step": step,
+            "wrench_change": np.asarray(instance.stiffness) @ step,
+            "slack": slack,
+            "feasible": slack <= INFEASIBLE_SLACK,
+            "backend": backend,
+        },
     )
 
 

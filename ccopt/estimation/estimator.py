@@ -505,46 +505,42 @@ def _assemble(
     wrench.flags.writeable = False
     row_valid.flags.writeable = False
     cone_rows, cone_bounds, margins = cone
-    return Estimate(
-        time=float(time),
-        wrench=wrench,
-        cone_rows=cone_rows,
-        cone_bounds=cone_bounds,
-        margins=margins,
-        row_valid=row_valid,
-        mu_h=friction.mu_h,
-        torque_lever=friction.l_h_eff,
-        ground_rows=ground.A,
-        ground_bounds=ground.b,
-        mu_g=ground.mu_g if all(fitted) else math.nan,
-        ground_fitted=fitted,
-        **{name: getattr(modes, name) for name in _MODE_FIELDS},
-        in_contact=in_contact,
-        theta_o=theta_o,
-        **{name: getattr(kinematics, name) for name in _KINEMATIC_FIELDS},
-        skipped=skipped,
-        kinematics_mean=rough[0],
-        kinematics_std=rough[1],
-        gravity=gravity,
-        hand_slid=hand_slid,
+    return validation.trusted(  # every field, each well formed by construction
+        Estimate,
+        {
+            "time": float(time),
+            "wrench": wrench,
+            "cone_rows": cone_rows,
+            "cone_bounds": cone_bounds,
+            "margins": margins,
+            "row_valid": row_valid,
+            "mu_h": friction.mu_h,
+            "torque_lever": friction.l_h_eff,
+            "ground_rows": ground.A,
+            "ground_bounds": ground.b,
+            "mu_g": ground.mu_g if all(fitted) else math.nan,
+            "ground_fitted": fitted,
+            "hand_mode": modes.hand_mode,
+            "hand_geometry": modes.hand_geometry,
+            "ground_mode": modes.ground_mode,
+            "in_contact": in_contact,
+            "theta_o": theta_o,
+            "s_h": kinematics.s_h,
+            "s_g": kinematics.s_g,
+            "d": kinematics.d,
+            "r_o": kinematics.r_o,
+            "theta_o_valid": kinematics.theta_o_valid,
+            "s_h_valid": kinematics.s_h_valid,
+            "contact_valid": kinematics.contact_valid,
+            "compliance": kinematics.compliance,
+            "compliance_std": kinematics.compliance_std,
+            "skipped": skipped,
+            "kinematics_mean": rough[0],
+            "kinematics_std": rough[1],
+            "gravity": gravity,
+            "hand_slid": hand_slid,
+        },
     )
-
-
-_MODE_FIELDS = ("hand_mode", "hand_geometry", "ground_mode")
-"""Fields an :class:`Estimate` takes from the classified :class:`~ccopt.modes.ContactConfiguration`."""
-_KINEMATIC_FIELDS = (
-    "s_h",
-    "s_g",
-    "d",
-    "r_o",
-    "theta_o_valid",
-    "s_h_valid",
-    "contact_valid",
-    "compliance",
-    "compliance_std",
-)
-"""Fields an :class:`Estimate` takes from the :class:`~ccopt.estimation.kinematics.KinematicEstimate`
-(its ``θ_o`` goes through the angle filter first)."""
 
 
 _UNKNOWN_KINEMATICS = KinematicEstimate(
