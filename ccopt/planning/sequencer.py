@@ -184,7 +184,8 @@ class GoalSequencer:
     def _reach(self) -> tuple[float, float]:
         """The robot's reach, cut at the tilts where a pivot rolled the hand."""
         low, high = self.reach
-        return max(low, self.tilt_limits.get(-1, low)), min(high, self.tilt_limits.get(1, high))
+        low, high = max(low, self.tilt_limits.get(-1, low)), min(high, self.tilt_limits.get(1, high))
+        return min(low, high), high
 
     def _take(self, step: Step) -> Step:
         self.motions += 1
