@@ -125,9 +125,10 @@ class LoopParams:
         return max(1, round(self.estimator_hz / self.record_hz))
 
 
-STEP_STATUSES = ("reached", "timeout", "infeasible")
+STEP_STATUSES = ("reached", "timeout", "infeasible", "rolled")
 """How a step can end: its coordinate settled within tolerance (by the estimate), its time ran out,
-or the estimated statics ruled it out."""
+the estimated statics ruled it out, or (a goal's pivot) the hand rolled on the face instead: the
+object stopped pivoting (:data:`ROLL_TIME`)."""
 
 
 @dataclass(frozen=True)
@@ -171,6 +172,8 @@ class RunResult:
     goals: tuple[GoalResult, ...] = ()
     hand_angle_range: tuple[float, float] = (-math.pi, math.pi)
     """The hand angles the plant's robot reaches (rad)."""
+    last_usable: Estimate | None = None
+    """The run's last estimate whose kinematics were valid (None if none was)."""
 
     @property
     def interrupted(self) -> bool:
@@ -290,6 +293,7 @@ class _StepTracker:
         self.start_time = 0.0
         self._nominal: np.ndarray | None = None
         self._within_since: float | None = None
+        self._rolled_since: float | None = None
         self.fresh = False
         """Whether the current step has not been controlled yet (the estimated statics judge it then)."""
 
@@ -344,6 +348,7 @@ class _StepTracker:
         self.command = Command(self.step.motion, targets, start=current, wrench=np.array(estimate.wrench))
         self.start_time = now
         self._within_since = None
+        self._rolled_since = None
         self.fresh = True
 
     def _next(self, now: float, estimate: Estimate, last: str | None) -> Step | None:
@@ -396,6 +401,21 @@ class _StepTracker:
             self.advance(now, estimate, hand_pose, "timeout")
         elif self.goal is not None and elapsed >= SLIDE_START_TIME and not self._started(coordinates):
             self.advance(now, estimate, hand_pose, "timeout", f"did not start within {SLIDE_START_TIME:g} s")
+        elif self.goal is not None and self._rolled(now, estimate):
+            self.advance(now, estimate, hand_pose, "rolled", "the hand rolled: the object stopped pivoting")
+
+    def _rolled(self, now: float, estimate: Estimate) -> bool:
+        """Whether a pivot has seen the hand turned past the object (the estimate's hand geometry,
+        the sign of ``θ_o − θ_h``, opposite to the pivot's) for :data:`ROLL_TIME`: the object no
+        longer turns with the hand (it lies on another vertex or a face), and pressing on would only
+        roll the hand further. (The other sign, the object ahead of the hand, is a hand tipping over
+        the face's end while the object still turns.)"""
+        if self.step.kind != "pivot" or estimate.hand_geometry != -math.copysign(1.0, self.step.delta):
+            self._rolled_since = None
+            return False
+        if self._rolled_since is None:
+            self._rolled_since = now
+        return now - self._rolled_since >= ROLL_TIME
 
     def _started(self, coordinates: np.ndarray | None) -> bool:
         """Whether a slide has moved its coordinate the commanded way by the slide onset (other
@@ -418,6 +438,10 @@ class _StepTracker:
         return (coordinates[k] - self.command.targets[k]) * math.copysign(1.0, step.delta) > step.tolerance
 
 
+ROLL_TIME = 0.15
+"""s: a goal's pivot whose hand the estimate sees off flush this long ends ``rolled`` (a flush
+pivot's hand is classified flush; the paper square pressed flat on its face rolled the hand within
+0.1 s of the tilt where it landed)."""
 SLIDE_START_TIME = 3.0
 """A goal's planned slide that has not started after this long (s) ends: where the estimated statics
 were too hopeful (a ground row never slid past is estimated inside the true one), the planner
@@ -533,6 +557,9 @@ class _Loop:
         self.last_aim: tuple[float, StaticsTarget] | None = None  # (time, target)
         self.sensed = 0  # estimator samples so far
         self.estimate: Estimate | None = None
+        self.last_usable: Estimate | None = None
+        self.tilt_limits: dict[int, float] = {}
+        """The tilts past which the goals' pivots rolled the hand (:class:`GoalSequencer`)."""
         self.hand_pose: np.ndarray | None = None
         self.lost_since: float | None = None
         self.lost_pose: np.ndarray | None = None
@@ -541,7 +568,9 @@ class _Loop:
 
     def _sequencer(self, index: int, goal: Goal, now: float) -> GoalSequencer:
         planner = PlannerParams(slide_beyond=self.goal.push)
-        return GoalSequencer(index, goal, now, self.plant.hand_angle_range, self.goal, planner)
+        return GoalSequencer(
+            index, goal, now, self.plant.hand_angle_range, self.goal, planner, self.tilt_limits
+        )
 
     def run(self) -> RunResult:
         start = wallclock.perf_counter()
@@ -581,6 +610,8 @@ class _Loop:
         time, pose, wrench = reading.time, reading.hand_pose, reading.hand_wrench
         commanded = modes.configuration(self.tracker.command.motion) if self.tracker.command else None
         self.estimate = self.estimator.update(time, pose, wrench, commanded)
+        if self.estimate.kinematics_valid:
+            self.last_usable = self.estimate
         self.hand_pose = pose if bool(np.all(np.isfinite(pose))) else None
         if self.sensed % self.params.record_stride == 0:
             self._record(reading)
@@ -690,6 +721,7 @@ class _Loop:
             folder=self.folder,
             goals=tuple(tracker.goal_results),
             hand_angle_range=tuple(self.plant.hand_angle_range),
+            last_usable=self.last_usable,
         )
         if self.writer is not None:
             self.writer.meta["steps"] = [step.as_dict() for step in result.steps]

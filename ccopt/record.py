@@ -38,7 +38,9 @@ import numpy as np
 CHUNKS = "chunks"
 RUN_ID_KEY = "__run_id__"
 """Key of the ``run_id`` in every chunk and in ``record.npz`` (not a data key)."""
-RUN_FILES = frozenset({"meta.json", "summary.json", "record.npz", "record.partial.npz", ".write_probe"})
+RUN_FILES = frozenset(
+    {"meta.json", "summary.json", "record.npz", "record.partial.npz", ".write_probe", "feasibility_map.npz"}
+)
 """Files of a run folder that ``prepare_folder(..., overwrite=True)`` may remove, besides
 :data:`RUN_SUFFIXES` and the chunks."""
 RUN_SUFFIXES = (".png", ".gif", ".partial")

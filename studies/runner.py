@@ -79,6 +79,7 @@ def study_modules() -> dict[str, str]:
         "robustness": "studies.robustness",
         "perturbation": "studies.perturbation",
         "faults": "studies.faults",
+        "goals": "studies.goals",
     }
 
 
