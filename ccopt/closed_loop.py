@@ -234,14 +234,15 @@ def enforced_rows(estimate: Estimate) -> np.ndarray:
     no friction boundary: keeping it would hold the hand force where it has been and block every new
     tilt, while the mode classifier stays conservative about it all the same."""
     enforced = np.array(estimate.row_valid, dtype=bool)
-    enforced[list(GROUND_ROWS)] &= np.asarray(estimate.ground_fitted, dtype=bool)
+    for row, fitted in zip(GROUND_ROWS, estimate.ground_fitted, strict=True):
+        enforced[row] &= bool(fitted)
     return enforced
 
 
 def kinematics_usable(estimate: Estimate) -> bool:
     """Valid and finite: an estimate flagged valid with NaN coordinates is treated as unknown."""
     values = (estimate.theta_o, estimate.s_h, estimate.s_g, estimate.d)
-    return bool(estimate.kinematics_valid) and all(np.isfinite(values))
+    return bool(estimate.kinematics_valid) and all(map(math.isfinite, values))
 
 
 def hand_proxy(hand_pose: np.ndarray) -> np.ndarray:
