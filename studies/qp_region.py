@@ -1,6 +1,6 @@
 """The QP's constraints and feasible region for one estimate (paper Fig. 4b–c).
 
-    python -m studies qp-region [--theta 10] [--s-hand 10] [--wrench 12,1.5,0.1] [--motion pivot] ...
+    ccopt study qp_region [--theta 10] [--s-hand 10] [--wrench 12,1.5,0.1] [--motion pivot] ...
 
 The estimate is exact here: the cone is the true one of the given object
 (:func:`ccopt.contact.model_friction_cone`), the kinematics are known, and the controller
@@ -56,6 +56,7 @@ _DEFAULT_CHANGE = {Motion.HOLD: 0.0, Motion.PIVOT: 2.0} | {
 """Default commanded changes at the command line (deg), else 1 mm: one the tick can achieve, so that
 the minimising plane cuts the region as in the paper's figure (7.2°, the paper's whole increment,
 asks for more than one tick allows and the plane misses the region)."""
+
 
 def _commanded(motion: Motion) -> int:
     """The column of the admissible-motion vectors ``(v_θ, v_h, v_g)`` a motion's cost drives (a hold
@@ -377,7 +378,9 @@ def positive(value: str) -> float:
 
 
 def make_parser() -> argparse.ArgumentParser:
-    parser = runner.study_parser("qp-region", __doc__.split("\n")[0], trials=False)
+    parser = runner.study_parser(
+        "qp_region", __doc__.split("\n")[0], "no effect: the study is one QP solve (about 2 s)", trials=False
+    )
     add = parser.add_argument
     add("--theta", type=finite, default=10.0, help="θ_o, deg")
     add("--s-hand", type=finite, default=10.0, help="s_h, mm")

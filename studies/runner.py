@@ -24,8 +24,8 @@ thread-safe (parametrised cvxpy problems, simulators) belongs in a
 The closed-loop studies share their command-line options (:func:`closed_loop_arguments`), table cells
 (:func:`cell`, :func:`slips_cell`) and the stop on Ctrl-C (:func:`finished`).
 
-Each study module has ``main(argv) -> int``; :func:`study_modules` is the registry behind
-``python -m studies NAME``.
+Each study module has ``main(argv) -> int`` and ``--quick``; every module of this package that defines
+``main`` is a study (:func:`ccopt.cliutil.scripts`), run as ``ccopt study NAME``.
 """
 
 from __future__ import annotations
@@ -56,7 +56,7 @@ from tqdm import tqdm
 
 from ccopt.cliutil import STOP_SIGNALS, OneLineParser, fail, seed_value, write_json
 from ccopt.closed_loop import RunResult
-from ccopt.schedule import Schedule, load_schedule
+from ccopt.schedule import load_schedule
 
 Spec = Any
 """A trial spec: a dataclass instance or a dict, JSON-serialisable once through :func:`spec_dict`."""
@@ -67,19 +67,6 @@ T = TypeVar("T")
 TRIALS_LOG = "trials.jsonl"
 SCHEDULER_TIMEOUT = "10s"
 """How long to wait for a Dask scheduler before giving up."""
-
-
-def study_modules() -> dict[str, str]:
-    """Study name (as typed after ``python -m studies``) → module with a ``main(argv) -> int``."""
-    return {
-        "feasibility": "studies.feasibility",
-        "qp-region": "studies.qp_region",
-        "gradients": "studies.gradients",
-        "paper": "studies.paper",
-        "robustness": "studies.robustness",
-        "perturbation": "studies.perturbation",
-        "faults": "studies.faults",
-    }
 
 
 # --- command line ---------------------------------------------------------------------------------
@@ -121,15 +108,16 @@ def output_folder(value: str) -> Path:
     return path
 
 
-def study_parser(name: str, description: str, trials: bool = True) -> OneLineParser:
+def study_parser(name: str, description: str, quick: str, trials: bool = True) -> OneLineParser:
     """The parser of study ``name`` with the shared options; the study adds its own.
 
-    ``--out DIR`` (default ``runs/study-NAME``) always; with ``trials``, also ``--workers N``
+    ``--out DIR`` (default ``runs/study-NAME``) and ``--quick`` (``quick`` says what it shrinks) always;
+    with ``trials``, also ``--workers N``
     (default :func:`default_workers`), ``--scheduler ADDRESS``, ``--seed``, ``--no-progress`` and
     ``--fresh`` (run every trial again instead of resuming, see :func:`run_study`).
     Bad values end the program with one line on stderr and exit status 2.
     """
-    parser = OneLineParser(prog=f"python -m studies {name}", description=description)
+    parser = OneLineParser(prog=f"ccopt study {name}", description=description)
     parser.add_argument(
         "--out",
         type=output_folder,
@@ -137,6 +125,7 @@ def study_parser(name: str, description: str, trials: bool = True) -> OneLinePar
         metavar="DIR",
         help="output folder, created (default: %(default)s)",
     )
+    parser.add_argument("--quick", action="store_true", help=quick)
     if trials:
         parser.add_argument(
             "--workers",
@@ -509,21 +498,30 @@ def slips_cell(row: Mapping[str, object]) -> str:
     return f"{row['unintended_slips']} ({parts})"
 
 
+QUICK_SCHEDULE = "smoke"
+"""The schedule of a closed-loop study run with ``--quick`` (unless ``--schedule`` names one)."""
+
+
 def closed_loop_arguments(parser: argparse.ArgumentParser, schedule: str = "paper") -> None:
-    """``--schedule`` (default ``schedule``) and ``--plant``, shared by the closed-loop studies."""
+    """``--schedule`` (default ``schedule``, :data:`QUICK_SCHEDULE` with ``--quick``) and ``--plant``,
+    shared by the closed-loop studies; :func:`checked_schedule` reads the schedule chosen."""
     parser.add_argument(
         "--schedule",
-        default=schedule,
-        help=f"built-in (paper, smoke) or a .yaml/.json file (default: {schedule})",
+        help=f"built-in (paper, smoke) or a .yaml/.json file (default: {schedule}; "
+        f"with --quick: {QUICK_SCHEDULE})",
     )
+    parser.set_defaults(default_schedule=schedule)
     parser.add_argument(
         "--plant", choices=("planar", "panda"), default="planar", help="simulated robot (default: planar)"
     )
 
 
-def checked_schedule(prog: str, name: str) -> Schedule:
-    """The schedule ``name``, or one line and exit 2."""
+def checked_schedule(prog: str, args: argparse.Namespace) -> str:
+    """The schedule a closed-loop study's ``args`` choose (see :func:`closed_loop_arguments`), checked:
+    its name or file, or one line and exit 2."""
+    name = args.schedule or (QUICK_SCHEDULE if args.quick else args.default_schedule)
     try:
-        return load_schedule(name)
+        load_schedule(name)
     except ValueError as error:
         fail(prog, str(error))
+    return name

@@ -120,7 +120,7 @@ def test_sigterm_stops_a_pooled_study_and_the_runs_under_way(tmp_path):
     process.send_signal(signal.SIGTERM)
     code, _, err = finish(process)
     assert code == 130 and time.monotonic() - sent < 10.0
-    assert err == [f"python -m studies paper: interrupted; finished trials are in {out / 'trials.jsonl'}"]
+    assert err == [f"ccopt study paper: interrupted; finished trials are in {out / 'trials.jsonl'}"]
     for meta in metas:
         assert status(meta.parent) == "interrupted"
         assert_loads(meta.parent)

@@ -110,11 +110,16 @@ def test_write_results_tables_specs_and_results(tmp_path):
     assert lines[1] == '1,"[0.1, 0.2]",1.5,"[null, 2.0]",' and lines[2] == "2,[0.3],,,ValueError: no"
 
 
-def test_registry_names_importable_studies_with_main():
+def test_every_listed_study_imports_with_a_main_and_the_helpers_are_not_listed():
     import importlib
 
-    for name, module in runner.study_modules().items():
-        assert callable(importlib.import_module(module).main), name
+    from ccopt.cliutil import scripts
+
+    found = scripts("studies")
+    assert "runner" not in found and "__main__" not in found and len(found) >= 7
+    for name, line in found.items():
+        module = importlib.import_module(f"studies.{name}")
+        assert callable(module.main) and module.__doc__.startswith(line) and line, name
 
 
 def test_unreachable_scheduler_is_one_line_exit_2(tmp_path, capsys, monkeypatch):
