@@ -420,7 +420,8 @@ class _Loop:
         self.controller = Controller(params.hand, params.control_period, params.controller_params)
         p = params.controller_params
         self.goal = TargetGoal(
-            params.hand.force_limits, p.normal_force, p.statics_margin, p.friction_step, p.slide_beyond
+            params.hand.force_limits, p.normal_force, p.statics_margin, p.friction_step, p.slide_beyond,
+            p.force_headroom,
         )
         self.health = SensorHealth(params.supervision.health(params.hand))
         self.writer = RecordWriter(out, meta or {}) if out is not None else None

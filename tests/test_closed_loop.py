@@ -31,6 +31,18 @@ def test_every_other_contact_keeps_its_mode(smoke_run):
     assert summary["unintended_slips"] == 0, summary["slip_events"]
 
 
+def test_the_smoke_run_estimates_the_kinematics_within_the_bar(smoke_run):
+    """The smoke schedule's four pivots make the kinematics valid (about 15° of pivoting), and from
+    then on the estimates match the simulator's truth: θ_o within 1°, s_h and s_g within 3 mm
+    (medians; metrics.estimation_errors scores only valid samples against truth)."""
+    result, summary = smoke_run
+    valid = result.samples["est_kinematics_valid"]
+    assert valid.any() and valid[np.argmax(valid) :].mean() > 0.95
+    assert summary["kinematics_valid_share"] > 0.4
+    assert summary["theta_err_deg"]["median"] <= 1.0
+    assert summary["s_h_err_mm"]["median"] <= 3.0 and summary["s_g_err_mm"]["median"] <= 3.0
+
+
 def test_the_pivots_return_the_object_to_its_start(smoke_run):
     result, _ = smoke_run
     true_theta = result.samples["true_coordinates"][:, 0]

@@ -76,8 +76,11 @@ def test_an_explore_step_expands_into_pivots_both_ways_and_friction_probes():
     explore = {"motion": "explore", "pivot_deg": 5.0, "probe_mm": 2.0}
     explored = schedule.schedule_from_dict({"steps": [explore]})
     kinds = [(step.kind, round(float(np.sign(step.delta)))) for step in explored.steps]
-    pivots = [("pivot", 1), ("pivot", -1), ("pivot", -1), ("pivot", 1)]
+    pivots = [("pivot", 1), ("pivot", -1), ("pivot", 1), ("pivot", -1), ("pivot", -1), ("pivot", 1)]
     assert kinds == [*pivots, ("slide_hand", 1), ("slide_hand", -1)]
+    turns = [abs(step.delta) for step in explored.steps if step.kind == "pivot"]
+    assert turns[2:] == pytest.approx([np.deg2rad(5.0)] * 4)  # first a third of the way, then the whole
+    assert turns[:2] == pytest.approx([np.deg2rad(5.0) / 3.0] * 2)
     assert all(step.explore for step in explored.steps)
     assert sum(step.delta for step in explored.steps if step.kind == "pivot") == pytest.approx(0.0)
     assert schedule.schedule_from_dict(explored.to_dict()).steps == explored.steps  # the file keeps the flag

@@ -96,6 +96,9 @@ class ControllerParams:
             estimated statics allow it (:func:`ccopt.statics.regulation_wrench`).
         statics_margin_share: the share of that margin the QP's rows keep at most (the rows' own
             margins above apply where they are smaller).
+        force_headroom: the QP's predicted normal force and the statics' force targets stay this far
+            (N) below the hand's largest force: the measured force overshoots the prediction by a
+            few newtons in a push (3.7 N on a heavy triangle's ground slide aimed at the limit).
         friction_step: how far beyond ``μ̂_h`` (the largest friction ratio the hand was seen to
             hold) a motion may explore the hand friction where ``μ̂_h`` leaves it short of its
             margin (:mod:`ccopt.control.targets`); 0 never explores.
@@ -133,6 +136,7 @@ class ControllerParams:
     statics_margin: float = 3.0
     statics_margin_share: float = 0.5
     friction_step: float = 0.1
+    force_headroom: float = 2.5
     slide_beyond: float = 1.5
     infeasible_margin: float = 1.0
     length_unit: float = 1e-3
@@ -144,16 +148,19 @@ class ControllerParams:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise ValueError(f"{name} must be positive, got {value!r}")
+        if not (math.isfinite(self.force_headroom) and self.force_headroom >= 0.0):
+            raise ValueError(f"force_headroom must be a non-negative force (N), got {self.force_headroom!r}")
         if len(self.max_speed) != 3 or not all(math.isfinite(v) and v > 0.0 for v in self.max_speed):
             raise ValueError(f"max_speed must be three positive speeds, got {self.max_speed!r}")
 
     def check_hand(self, hand: Hand) -> None:
-        """``ValueError`` unless the target normal force lies inside the hand's force limits."""
+        """``ValueError`` unless the target normal force lies inside the hand's force limits, below
+        the headroom."""
         f_min, f_max = hand.force_limits
-        if not f_min < self.normal_force < f_max:
+        if not f_min < self.normal_force < f_max - self.force_headroom:
             raise ValueError(
                 f"normal_force {self.normal_force} N must lie inside the hand's force limits "
-                f"{hand.force_limits}"
+                f"{hand.force_limits} less the headroom {self.force_headroom} N"
             )
 
 
@@ -335,7 +342,7 @@ class Controller:
         margins = self._margins(f_n, state)
         f_min, f_max = self.hand.force_limits
         rows = np.vstack([state.cone_rows, [[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]]])
-        bounds = np.concatenate([state.cone_bounds - margins, [f_max, -f_min]])
+        bounds = np.concatenate([state.cone_bounds - margins, [f_max - p.force_headroom, -f_min]])
         active = np.concatenate([modes.kept_rows(command.motion) & state.row_valid, [True, True]])
         units = self._units  # the QP's variable y is the step in task units: Δx = units · y
         return QPInstance(

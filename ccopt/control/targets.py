@@ -117,6 +117,8 @@ class TargetGoal:
             of the forces seen, inside the true one (:func:`ccopt.statics.regulation_wrench`'s
             ``beyond``), so the wrench on it need not slide the object; put past it, the normal
             force is chosen so that the hand still keeps its margin while pushing there.
+        headroom: the force target stays this far (N) below ``f_max``; the motion is still judged
+            on the whole range (:attr:`ccopt.control.controller.ControllerParams.force_headroom`).
     """
 
     force_limits: tuple[float, float]
@@ -124,6 +126,7 @@ class TargetGoal:
     margin: float
     friction_step: float = 0.0
     push: float = 0.0
+    headroom: float = 0.0
 
 
 def statics_target(estimate: Estimate, hand_angle: float, motion: Motion, goal: TargetGoal) -> StaticsTarget:
@@ -163,4 +166,7 @@ def _target(
     if result.wrench is None:
         return StaticsTarget(None, None, -math.inf)
     f_n, f_t, _ = result.wrench  # short of margin, still the best there is
+    cap = goal.force_limits[1] - goal.headroom
+    if f_n > cap:  # the tangential force keeps its ratio to the normal force
+        f_n, f_t = cap, f_t * cap / f_n
     return StaticsTarget(float(f_n), float(f_t), result.margin)
