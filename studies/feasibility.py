@@ -159,7 +159,8 @@ def heat_map(path: Path, chunk: FeasibilityChunk, result: dict) -> None:
         ax.set_ylabel("μ_h")
     figure.colorbar(image, ax=axes, label=f"margin (N); feasible ≥ {chunk.min_margin:g}")
     figure.suptitle(
-        f"μ_g={chunk.mu_ground:g}  m={chunk.mass:g} kg  d={chunk.d * 1e3:g} mm  s_h={chunk.s_h * 1e3:g} mm  "
+        f"statics margin (no paper figure): μ_g={chunk.mu_ground:g}  m={chunk.mass:g} kg  "
+        f"d={chunk.d * 1e3:g} mm  s_h={chunk.s_h * 1e3:g} mm  "
         f"f_n∈[{chunk.force_limits[0]:g}, {chunk.force_limits[1]:g}] N"
     )
     figure.savefig(path, dpi=110)

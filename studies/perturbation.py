@@ -37,8 +37,8 @@ Which pushes cannot recover, and why (the ``why`` column):
 
 ``held mode`` and ``hand, not object`` can both apply (joined by ``;``).
 
-Outputs in ``<out>``: ``results.json``/``results.csv`` (traces included) and ``perturbation.png``
-(error traces per regulation and push direction, grey during the push, like Fig. 9).
+Outputs in ``<out>``: ``results.json`` (traces included), ``results.csv`` (flat, no traces) and
+``perturbation.png`` (error traces per regulation and push direction, grey during the push, like Fig. 9).
 """
 
 from __future__ import annotations
@@ -303,7 +303,9 @@ def write_figure(path: Path, specs: Sequence[Push], results: Sequence[dict]) -> 
             ax.set_ylabel(f"error ({UNIT[k]})")
     for ax in axes[-1]:
         ax.set_xlabel("time from push start (s)")
-    figure.suptitle("True error of the regulated coordinate (black; grey: pushed) and measured (blue)")
+    figure.suptitle(
+        "Fig. 9: true error of the regulated coordinate (black; grey: pushed) and measured (blue)"
+    )
     figure.savefig(path, dpi=110)
 
 

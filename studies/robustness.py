@@ -174,7 +174,7 @@ def write_figure(path: Path, specs: Sequence[RandomObject], results: Sequence[di
         values = column(results, key)
         if values:
             ax.boxplot(values, widths=0.5)
-        ax.set_title(f"{title}, {len(values)} trials")
+        ax.set_title(f"{title}, {len(values)} trials (no paper figure)")
         ax.set_xticks([])
     ratios = column(results, "ratio_median")
     if ratios:

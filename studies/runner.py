@@ -56,6 +56,7 @@ from tqdm import tqdm
 
 from ccopt.cliutil import STOP_SIGNALS, OneLineParser, fail, seed_value, write_json
 from ccopt.closed_loop import RunResult
+from ccopt.config import UNITS
 from ccopt.schedule import load_schedule
 
 Spec = Any
@@ -442,27 +443,50 @@ def finished_trials(records: Sequence[dict], specs: Sequence[Spec]) -> dict[int,
     return found
 
 
-def write_results(out: Path, specs: Sequence[Spec], results: Sequence[dict], summary: dict) -> None:
-    """``results.json`` (summary and every trial) and ``results.csv`` (one row per trial) in ``out``.
+CSV_LIST_MOST = 16
+"""Longest list a ``results.csv`` cell holds (its items joined by ``;``); longer ones (traces, grids)
+are in ``results.json`` only."""
 
-    CSV columns are the spec's fields then the result's; list values are written as JSON.
-    """
+
+def csv_row(row: Mapping[str, Any]) -> dict[str, Any]:
+    """A flat CSV row of a JSON-ready mapping: nested mappings as ``outer.inner`` columns, a list of up
+    to :data:`CSV_LIST_MOST` plain values as its items joined by ``;`` (None empty), longer lists and
+    lists of mappings left out; never a JSON array in a cell."""
+    flat: dict[str, Any] = {}
+    for key, value in row.items():
+        if isinstance(value, Mapping):
+            flat.update({f"{key}.{inner}": item for inner, item in csv_row(value).items()})
+        elif isinstance(value, list):
+            plain = all(not isinstance(item, list | Mapping) for item in value)
+            if plain and len(value) <= CSV_LIST_MOST:
+                flat[key] = ";".join("" if item is None else str(item) for item in value)
+        else:
+            flat[key] = value
+    return flat
+
+
+def write_results(
+    out: Path, specs: Sequence[Spec], results: Sequence[dict], summary: dict, units: str = UNITS
+) -> None:
+    """``results.json`` (``units``, the summary and every trial) and ``results.csv`` (one flat row per
+    trial, :func:`csv_row`: the spec's fields then the result's) in ``out``."""
     rows = [{**spec_dict(spec), **json_ready(result)} for spec, result in zip(specs, results, strict=True)]
     write_json(
         out / "results.json",
         {
+            "units": units,
             "summary": json_ready(summary),
             "trials": [
                 {"spec": spec_dict(s), "result": json_ready(r)} for s, r in zip(specs, results, strict=True)
             ],
         },
     )
-    columns = list(dict.fromkeys(key for row in rows for key in row))
+    flat = [csv_row(row) for row in rows]
+    columns = list(dict.fromkeys(key for row in flat for key in row))
     with open(out / "results.csv", "w", newline="") as stream:
         writer = csv.DictWriter(stream, fieldnames=columns)
         writer.writeheader()
-        for row in rows:
-            writer.writerow({k: json.dumps(v) if isinstance(v, list | dict) else v for k, v in row.items()})
+        writer.writerows(flat)
 
 
 def failures(results: Sequence[dict]) -> list[tuple[int, str]]:
