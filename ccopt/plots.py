@@ -445,9 +445,9 @@ def control_figure(run: Run) -> Figure:
 
 MM = 1e3
 """Metres to millimetres, the unit of the animation's axes."""
-GIF_SIZE = (8.0, 6.0)
+GIF_SIZE = (8.0, 5.0)
 GIF_DPI = 80
-"""The GIF's figure size (in) and resolution: 640 × 480 pixels."""
+"""The GIF's figure size (in) and resolution: 640 × 400 pixels."""
 FRAME_S = 0.1
 """How long each GIF frame shows, s of playback (10 frames a second)."""
 NICE_SPEEDS = (1, 2, 3, 5, 10, 20, 30, 50, 100)
@@ -471,9 +471,9 @@ def _view(
     shapes = [frame.object for frame in scene if frame.object is not None]
     points = np.vstack(shapes or [np.vstack((frame.hand, frame.r_o)) for frame in scene])
     low, high = points.min(axis=0), points.max(axis=0)
-    room = max(3.0 * l_h, 0.25 * float(np.max(high - low)))
+    room = max(2.0 * l_h + 0.01, 0.15 * float(np.max(high - low)))  # the cones are 2 l_h long
     low, high = low - room, high + room
-    low[1] = min(low[1], -0.25 * room)
+    low[1] = min(low[1] + 0.7 * room, -0.3 * room)  # a strip of ground
     centre, half = (low + high) / 2, (high - low) / 2
     half = np.maximum(half, half[::-1] * np.array([aspect, 1.0 / aspect]))
     centre[1] = low[1] + half[1]  # room added above: the ground stays near the bottom
@@ -574,7 +574,7 @@ def _frame_geometry(frame: replay.Frame) -> dict[str, np.ndarray | None]:
 
 
 def animation(run: Run, path: str | Path, max_frames: int = 120) -> Path:
-    """Write a GIF of the run to ``path`` (640 × 480 px) and return it (cf. the paper's Fig. 5). The
+    """Write a GIF of the run to ``path`` (640 × 400 px) and return it (cf. the paper's Fig. 5). The
     true object and hand, the ground, the true (black) and estimated (blue) ground contact and contact
     geometry, the estimated hand (blue) and ground (purple) friction cones and the true ones (dashed),
     and the measured hand force, in mm, in a frame fixed on the object (the hand may leave it). Frames
@@ -586,7 +586,7 @@ def animation(run: Run, path: str | Path, max_frames: int = 120) -> Path:
     path = Path(path)
     fig = Figure(figsize=GIF_SIZE, dpi=GIF_DPI)
     canvas = FigureCanvasAgg(fig)
-    box = (0.09, 0.09, 0.55, 0.82)
+    box = (0.08, 0.11, 0.58, 0.78)
     ax = fig.add_axes(box)
     n = len(record.data["time"]) if has(record, *replay.SCENE_KEYS) else 0
     if n == 0:
