@@ -353,8 +353,8 @@ def friction_cones(run: Run, at: float | None = None) -> Figure:
         when = "no estimate"
     else:
         last = " (the run's last estimate)" if at is None else ""
-        when = f"estimate at t = {record.data['time'][index]:.2f} s{last}"
-    _title(fig, f"Fig. 7: friction cones, {when} (black) vs true (orange)", record)
+        when = f"estimated (black) at t = {record.data['time'][index]:.2f} s{last}"
+    _title(fig, f"Fig. 7: friction cones, {when} vs true (orange, dashed)", record)
     return fig
 
 
