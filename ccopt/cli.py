@@ -445,8 +445,49 @@ def print_summary(summary: dict, folder: Path) -> None:
         ("steps impossible on the true object (oracle)", str(summary.get("impossible_steps", "not checked"))),
         ("sim / wall time (s)", f"{summary['sim_time_s']:.1f} / {summary['wall_time_s']:.1f}"),
     ]
+    if summary["goals_total"]:
+        rows.insert(2, ("goals reached", f"{summary['goals_reached']}/{summary['goals_total']}"))
     print_table(rows, ("metric", "value"))
+    if summary["goals"]:
+        print_table(goal_rows(summary["goals"]), GOAL_HEADER)
     print(f"record: {folder}")
+
+
+GOAL_HEADER = ("#", "goal", "status", "true error (°, mm, mm)", "time (s)", "motions", "oracle")
+
+
+def goal_rows(goals: list[dict]) -> list[tuple[str, ...]]:
+    """One row per scored goal (:func:`ccopt.metrics.goal_scores`): its targets (degrees, mm; ``·``
+    where free), status, the true error at its end, its time, the motions it used and whether the
+    experimenter's oracle (the planner on the true statics) reaches it."""
+
+    def given(targets: dict, units: tuple[str, ...]) -> str:
+        parts = [f"{name} {value:g}{unit}" for (name, value), unit in zip(targets.items(), units, strict=True)
+                 if value is not None]
+        return ", ".join(parts)
+
+    def error(values: dict) -> str:
+        return ", ".join("·" if value is None else f"{value:+.1f}" for value in values.values())
+
+    rows = []
+    for goal in goals:
+        targets = {"θ": goal["targets"]["theta_deg"], "s_h": goal["targets"]["s_h_mm"],
+                   "s_g": goal["targets"]["s_g_mm"]}
+        oracle = goal.get("oracle")
+        verdict = "n/a" if oracle is None else ("reachable" if oracle["reachable"] else "unreachable")
+        off = goal["status"] == "reached" and not goal["within_tolerance"]
+        rows.append(
+            (
+                str(goal["index"]),
+                given(targets, ("°", " mm", " mm")),
+                goal["status"] + (" (truth off)" if off else ""),
+                error(goal["true_error"]),
+                f"{goal['time_s']:.1f}",
+                str(goal["motions"]),
+                verdict,
+            )
+        )
+    return rows
 
 
 def _loaded(prog: str, folder: str) -> record.Record:

@@ -34,11 +34,13 @@ from ccopt.hand import Hand
 from ccopt.health import HealthParams, SensorHealth
 from ccopt.modes import MOTION_CODES
 from ccopt.objects import PlanarObject
+from ccopt.planning.planner import PlannerParams
+from ccopt.planning.sequencer import GoalResult, GoalSequencer, s_g_from
 from ccopt.plant.base import MIN_RATE, Plant, PlantParams, StartConfig
 from ccopt.plant.placement import hand_over_vertex
 from ccopt.plant.sensors import SensorParams, Sensors
 from ccopt.record import RecordWriter
-from ccopt.schedule import Schedule, Step
+from ccopt.schedule import Goal, Schedule, Step
 
 if TYPE_CHECKING:
     from ccopt.plant.mujoco_panda import PandaParams
@@ -127,6 +129,8 @@ class StepResult:
     status: str
     reason: str = ""
     explore: bool = False
+    goal: int | None = None
+    """The schedule index of the goal this motion was planned for (None: a schedule step)."""
 
     @property
     def reached(self) -> bool:
@@ -151,6 +155,9 @@ class RunResult:
     status: str
     message: str
     folder: Path | None
+    goals: tuple[GoalResult, ...] = ()
+    hand_angle_range: tuple[float, float] = (-math.pi, math.pi)
+    """The hand angles the plant's robot reaches (rad)."""
 
     @property
     def interrupted(self) -> bool:
@@ -234,13 +241,33 @@ class _StepTracker:
     progress changes (hand proxy → estimate), the nominal configuration is re-read. A step is reached
     once its coordinate has stayed within tolerance for ``settle_time``, or, a slide, once it has
     gone past its target by more than the tolerance; never on an unusable estimate.
+
+    A goal step (:class:`~ccopt.schedule.Goal`) is run by a :class:`~ccopt.planning.sequencer.GoalSequencer`
+    ``sequencer(index, goal, now)`` makes: its motions are steps like the schedule's own (their
+    results carry the goal's index), each planned from the estimate when the previous one ended and
+    started from where the estimate says the object is.
     """
 
-    def __init__(self, schedule: Schedule, settle_time: float, slide_onset: float) -> None:
+    def __init__(
+        self,
+        schedule: Schedule,
+        settle_time: float,
+        slide_onset: float,
+        sequencer: Callable[[int, Goal, float], GoalSequencer] | None = None,
+    ) -> None:
         self.steps = schedule.steps
         self.settle_time = settle_time
         self.slide_onset = slide_onset
+        self.sequencer = sequencer
         self.index = -1
+        self.active: Step | None = None
+        """The motion under way: a schedule step or a goal's planned motion."""
+        self.goal: GoalSequencer | None = None
+        self.goal_results: list[GoalResult] = []
+        self.s_g_origin: float | None = None
+        """The run's start ground contact (goals' ``s_g`` origin): the latest usable estimate before
+        the first ground slide, when the regression has had the most data."""
+        self._ground_moved = False
         self.results: list[StepResult] = []
         self.use_estimate = False
         self.command: Command | None = None
@@ -252,7 +279,7 @@ class _StepTracker:
 
     @property
     def step(self) -> Step:
-        return self.steps[self.index]
+        return self.active
 
     @property
     def done(self) -> bool:
@@ -269,15 +296,23 @@ class _StepTracker:
     def advance(
         self, now: float, estimate: Estimate, hand_pose: np.ndarray, status: str, reason: str = ""
     ) -> None:
-        if self.index >= 0:
-            step = self.step
-            result = (self.index, step.kind, step.delta, self.start_time, now, status, reason, step.explore)
-            self.results.append(StepResult(*result))
-        self.index += 1
-        if self.done:
+        """End the motion under way with ``status`` and start the next one."""
+        latest = s_g_from(estimate)
+        if latest is not None and not self._ground_moved:  # the start's, as well as it is known now
+            self.s_g_origin = latest
+        last = None
+        if self.active is not None:
+            step, goal = self.active, self.goal.index if self.goal is not None else None
+            ended = (self.start_time, now, status, reason, step.explore, goal)
+            self.results.append(StepResult(self.index, step.kind, step.delta, *ended))
+            last = status
+        step = self._next(now, estimate, last)
+        if step is None:
             return
+        self.active = step
+        self._ground_moved = self._ground_moved or step.kind == "slide_ground"
         use_estimate = kinematics_usable(estimate)
-        if use_estimate != self.use_estimate or status != "reached":
+        if use_estimate != self.use_estimate or status != "reached" or self.goal is not None:
             self._nominal = None
         self.use_estimate = use_estimate
         current = self.coordinates(estimate, hand_pose)
@@ -294,6 +329,32 @@ class _StepTracker:
         self.start_time = now
         self._within_since = None
         self.fresh = True
+
+    def _next(self, now: float, estimate: Estimate, last: str | None) -> Step | None:
+        """The next motion: the goal under way's, else the schedule's next step (a goal's first
+        motion); None at the end of the schedule."""
+        if self.goal is not None:
+            answer = self.goal.next(now, estimate, self.s_g_origin, last)
+            if isinstance(answer, Step):
+                return answer
+            self.goal_results.append(answer)
+            self.goal = None
+        while True:
+            self.index += 1
+            if self.done:
+                self.active = None
+                return None
+            item = self.steps[self.index]
+            if isinstance(item, Step):
+                return item
+            if self.sequencer is None:
+                raise ValueError(f"step {self.index + 1} is a goal but the loop has no planner")
+            self.goal = self.sequencer(self.index, item, now)
+            answer = self.goal.next(now, estimate, self.s_g_origin)
+            if isinstance(answer, Step):
+                return answer
+            self.goal_results.append(answer)
+            self.goal = None
 
     def update(self, now: float, estimate: Estimate, hand_pose: np.ndarray) -> None:
         """Move to the next step when this one is reached or timed out."""
@@ -317,6 +378,17 @@ class _StepTracker:
             self.advance(now, estimate, hand_pose, "reached")
         elif elapsed >= self.step.timeout:
             self.advance(now, estimate, hand_pose, "timeout")
+        elif self.goal is not None and elapsed >= SLIDE_START_TIME and not self._started(coordinates):
+            self.advance(now, estimate, hand_pose, "timeout", f"did not start within {SLIDE_START_TIME:g} s")
+
+    def _started(self, coordinates: np.ndarray | None) -> bool:
+        """Whether a slide has moved its coordinate the commanded way by the slide onset (other
+        motions count as started)."""
+        step, command = self.step, self.command
+        if not modes.REMOVED_ROWS[step.motion] or coordinates is None:
+            return True
+        k = step.coordinate
+        return (coordinates[k] - command.start[k]) * math.copysign(1.0, step.delta) >= self.slide_onset
 
 
     def _overshot(self, coordinates: np.ndarray | None) -> bool:
@@ -328,6 +400,12 @@ class _StepTracker:
         if coordinates is None or not modes.REMOVED_ROWS[step.motion] or abs(step.delta) < self.slide_onset:
             return False
         return (coordinates[k] - self.command.targets[k]) * math.copysign(1.0, step.delta) > step.tolerance
+
+
+SLIDE_START_TIME = 3.0
+"""A goal's planned slide that has not started after this long (s) ends: where the estimated statics
+were too hopeful (a ground row never slid past is estimated inside the true one), the planner
+tries elsewhere rather than push for the motion's whole timeout."""
 
 
 RUN_STATUSES = ("completed", "interrupted", "contact_lost", "sensor_fault", "timeout", "error")
@@ -428,7 +506,9 @@ class _Loop:
         self.folder = Path(out) if out is not None else None
         self.on_tick = on_tick
         self.samples: dict[str, list[np.ndarray]] = {}
-        self.tracker = _StepTracker(schedule, params.settle_time, params.controller_params.slide_onset)
+        self.tracker = _StepTracker(
+            schedule, params.settle_time, params.controller_params.slide_onset, self._sequencer
+        )
         self.target = np.array(self.plant.target(), dtype=float)
         self.velocity = np.zeros(3)
         self.pending = list(params.perturbations)
@@ -439,6 +519,10 @@ class _Loop:
         self.lost_pose: np.ndarray | None = None
         self.status = "completed"
         self.message = ""
+
+    def _sequencer(self, index: int, goal: Goal, now: float) -> GoalSequencer:
+        planner = PlannerParams(slide_beyond=self.goal.push)
+        return GoalSequencer(index, goal, now, self.plant.hand_angle_range, self.goal, planner)
 
     def run(self) -> RunResult:
         start = wallclock.perf_counter()
@@ -557,6 +641,11 @@ class _Loop:
             self.plant.set_target(self.target, self.velocity)
 
     def _finish(self, wall: float) -> RunResult:
+        tracker = self.tracker
+        if tracker.goal is not None:  # the run ended inside a goal
+            why = f"the run ended: {self.status}{': ' + self.message if self.message else ''}"
+            tracker.goal_results.append(tracker.goal.end(self.plant.time, "failed", why))
+            tracker.goal = None
         result = RunResult(
             steps=tuple(self.tracker.results),
             samples={key: np.stack(values) for key, values in self.samples.items()},
@@ -565,9 +654,12 @@ class _Loop:
             status=self.status,
             message=self.message,
             folder=self.folder,
+            goals=tuple(tracker.goal_results),
+            hand_angle_range=tuple(self.plant.hand_angle_range),
         )
         if self.writer is not None:
             self.writer.meta["steps"] = [step.as_dict() for step in result.steps]
+            self.writer.meta["goals"] = [goal.as_dict() for goal in result.goals]
             self.writer.meta["message"] = self.message
             self.writer.close(status=self.status)
         return result

@@ -59,7 +59,10 @@ PARAMS_KEYS = (
     "perturbations",
 )
 RECORD_KEYS = frozenset(
-    {"feasibility", "steps", "status", "message", "samples", "versions", "run_id", "units", "record_units"}
+    {
+        "feasibility", "steps", "goals", "status", "message", "samples", "versions", "run_id", "units",
+        "record_units",
+    }
 )
 """Keys of ``meta.json`` that a run writes about itself: not settings, ignored when read back."""
 OBJECT_KEYS = ("name", "vertices", "mass", "added_mass", "mu_hand", "mu_ground")

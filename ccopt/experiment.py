@@ -22,9 +22,14 @@ from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+import numpy as np
+
 from ccopt import closed_loop, config, metrics, statics
 from ccopt.closed_loop import LoopParams, RunResult
 from ccopt.objects import PlanarObject
+from ccopt.planning.planner import oracle_plan
+from ccopt.planning.sequencer import GoalResult
+from ccopt.planning.tour import vertex_range
 from ccopt.record import load_record, write_summary
 from ccopt.schedule import Schedule
 
@@ -96,6 +101,32 @@ def check_schedule(
     return statics.schedule_feasibility(obj, schedule.steps, start, params.hand)
 
 
+def goal_oracle(
+    obj: PlanarObject,
+    params: LoopParams,
+    data: dict[str, np.ndarray],
+    goal: GoalResult,
+    hand_angle_range: tuple[float, float],
+) -> dict[str, object]:
+    """The experimenter's answer for a goal: the planner on the *true* statics from the true
+    configuration when the goal began (:func:`ccopt.planning.planner.oracle_plan`), within the
+    robot's reach and the object's start vertex: ``reachable`` or not, why, and with how many
+    motions."""
+    start = closed_loop.start_config(obj, params)
+    truth = statics.true_statics(obj, start, params.hand)
+    begin = np.asarray(data["true_coordinates"])[metrics.sample_at(data, goal.start_time)]
+    origin = float(np.asarray(data["true_coordinates"])[0, 2])
+    low, high = vertex_range(obj, start)  # the object stays on its start vertex
+    reach = (max(hand_angle_range[0], low), min(hand_angle_range[1], high))
+    f_min, f_max = params.hand.force_limits
+    forces = (f_min, f_max - params.controller_params.force_headroom)
+    lever = params.estimator_params.friction.torque_margin * params.hand.half_length
+    answer = oracle_plan(
+        truth.statics, tuple(begin), goal.goal, origin, reach, lever, forces, face=truth.s_h_range
+    )
+    return {"reachable": answer.status == "reached", "reason": answer.reason, "motions": len(answer.motions)}
+
+
 def run_experiment(
     obj: PlanarObject,
     schedule: Schedule,
@@ -114,17 +145,28 @@ def run_experiment(
     params = params or LoopParams()
     checks = check_schedule(obj, schedule, params)
     if warn is not None:
+        impossible = statics.impossible_steps(checks)
         for check in checks:
-            if not check.feasible:
+            if check.index in impossible:
                 warn(f"not physically possible for this object: {check.describe()}")
     meta = run_meta(obj, schedule, seed, params)
     meta["feasibility"] = [asdict(check) for check in checks]
     result = closed_loop.run(obj, schedule, params, seed=seed, out=folder, meta=meta, on_tick=on_tick)
     data = load_record(folder).data if folder is not None else result.samples
     steps = [step.as_dict() for step in result.steps]
+    goals = [goal.as_dict() for goal in result.goals]
     summary = metrics.summarize(
-        data, steps, len(schedule.steps), result.sim_time, result.wall_time, status=result.status
+        data,
+        steps,
+        len(schedule.motions),
+        result.sim_time,
+        result.wall_time,
+        result.status,
+        goals,
+        len(schedule.goals),
     )
+    for entry, goal in zip(summary["goals"], result.goals, strict=True):
+        entry["oracle"] = goal_oracle(obj, params, data, goal, result.hand_angle_range)
     summary["message"] = result.message
     summary["units"] = SUMMARY_UNITS
     summary["impossible_steps"] = statics.impossible_steps(checks)

@@ -65,7 +65,8 @@ def estimation_errors(data: Mapping[str, np.ndarray]) -> dict[str, dict[str, flo
     }
 
 
-def _at(data: Mapping[str, np.ndarray], moment: float) -> int:
+def sample_at(data: Mapping[str, np.ndarray], moment: float) -> int:
+    """The index of the first record sample at or after ``moment`` (s; the last sample if none)."""
     return int(np.clip(np.searchsorted(data["time"], moment), 0, len(data["time"]) - 1))
 
 
@@ -77,7 +78,7 @@ def realised_ratios(data: Mapping[str, np.ndarray], steps: Sequence[Mapping[str,
         k = modes.driven_coordinate(step["kind"])
         if k is None or step.get("explore"):
             continue
-        start, end = _at(data, step["start_time"]), _at(data, step["end_time"])
+        start, end = sample_at(data, step["start_time"]), sample_at(data, step["end_time"])
         change = data["true_coordinates"][end, k] - data["true_coordinates"][start, k]
         if k == 0:
             change = wrap_angle(change)
@@ -99,7 +100,7 @@ def unintended_slips(
     slid = np.cumsum(np.abs(data["true_slip_rates"]) * intervals[:, None], axis=0)
     relative_angle = wrap_angle(data["true_coordinates"][:, 0] - data["true_hand_pose"][:, 2])
     for step in steps:
-        start, end = _at(data, step["start_time"]), _at(data, step["end_time"])
+        start, end = sample_at(data, step["start_time"]), sample_at(data, step["end_time"])
         if end <= start:
             continue
         hand_stick, hand_flush, ground_stick = modes.kept_contacts(step["kind"])
@@ -176,37 +177,50 @@ def summarize(
     sim_time: float | None = None,
     wall_time: float | None = None,
     status: str = "completed",
+    goals: Sequence[Mapping[str, object]] = (),
+    goals_total: int = 0,
 ) -> dict[str, object]:
     """The ``summary.json`` of a run (docs/architecture.md §8); ``status`` is how the run ended.
 
     Either a run's own result and its schedule, ``summarize(result, schedule)`` (the
     :class:`~ccopt.closed_loop.RunResult` of :func:`ccopt.closed_loop.run`, recorded or in memory), or
-    its record's arrays, the per-step dicts of ``meta.json``, the schedule's length, the simulated and
-    wall time (s) and the status. A run that stopped before its first sample (``data`` empty) is
-    summarised with nothing measured: no step done, every statistic None.
+    its record's arrays; ``steps``, the results of every motion (a goal's planned motions carry its
+    index in ``goal``), the per-step dicts of ``meta.json``; ``steps_total`` the number of the
+    schedule's own motion steps; the simulated and wall time (s); the status; ``goals`` the goal
+    results (:meth:`ccopt.planning.sequencer.GoalResult.as_dict`) of the ``goals_total`` goal steps.
+    A run that stopped before its first sample (``data`` empty) is summarised with nothing measured:
+    no step done, every statistic None.
     """
     if not isinstance(data, Mapping):
         return summarize(*_run_inputs(data, steps))
     if len(data.get("time", ())) == 0:
-        return _unmeasured(steps_total, sim_time, wall_time, status)
+        return _unmeasured(steps_total, sim_time, wall_time, status, goals_total)
     ratios = realised_ratios(data, steps)
     slips = unintended_slips(data, steps)
     contacts = np.asarray(data["true_contacts"], dtype=bool)
     kept_contact = bool(np.mean(contacts.all(axis=1)) >= CONTACT_SHARE)
-    steps_done = sum(bool(step["reached"] or step.get("explore")) for step in steps)
+    own = [step for step in steps if step.get("goal") is None]
+    steps_done = sum(bool(step["reached"] or step.get("explore")) for step in own)
     valid = np.asarray(data["est_kinematics_valid"], dtype=bool)
+    scored = goal_scores(data, goals)
+    settled = (
+        all(goal["status"] in ("reached", "unreachable") for goal in scored) and len(scored) == goals_total
+    )
     return {
         "status": status,
-        "completed": bool(steps_done == steps_total and kept_contact),
+        "completed": bool(steps_done == steps_total and kept_contact and settled),
         "steps_done": steps_done,
         "steps_total": steps_total,
+        "goals": scored,
+        "goals_reached": sum(goal["status"] == "reached" for goal in scored),
+        "goals_total": goals_total,
         "contact_kept": kept_contact,
         **estimation_errors(data),
         "kinematics_valid_share": float(valid.mean()) if valid.size else 0.0,
         "ratio_realised_commanded": quartiles(ratios),
         "ratio_by_kind": ratio_by_kind(data, steps),
         "normal_force_n": normal_force(data),
-        "infeasible_steps": [int(step["index"]) for step in steps if step.get("status") == "infeasible"],
+        "infeasible_steps": [int(step["index"]) for step in own if step.get("status") == "infeasible"],
         "unintended_slips": len(slips),
         "slip_events": slips,
         "mode_confusion": mode_confusion(data),
@@ -216,7 +230,39 @@ def summarize(
     }
 
 
-def _unmeasured(steps_total: int, sim_time: float, wall_time: float, status: str) -> dict[str, object]:
+def goal_scores(
+    data: Mapping[str, np.ndarray], goals: Sequence[Mapping[str, object]]
+) -> list[dict[str, object]]:
+    """Every goal's result with its ``true_error`` at its end: truth minus target, ``theta_deg``,
+    ``s_h_mm``, ``s_g_mm`` (``s_g`` from the true ground contact at the run's start; None where the
+    goal leaves it free), and ``within_tolerance`` (every given coordinate, by truth)."""
+    if not goals:
+        return []
+    true = np.asarray(data["true_coordinates"])
+    origin = true[0, 2]
+    scored = []
+    for goal in goals:
+        end = true[sample_at(data, float(goal["end_time"]))]
+        targets = goal["targets"]
+        reached = (np.rad2deg(end[0]), 1e3 * end[1], 1e3 * (end[2] - origin))
+        error = {
+            key: None if targets[key] is None else float(value - targets[key])
+            for key, value in zip(("theta_deg", "s_h_mm", "s_g_mm"), reached, strict=True)
+        }
+        limits = {
+            "theta_deg": goal["tolerance_deg"],
+            "s_h_mm": goal["tolerance_mm"],
+            "s_g_mm": goal["tolerance_mm"],
+        }
+        within = all(value is None or abs(value) <= limits[key] for key, value in error.items())
+        time = float(goal["end_time"]) - float(goal["start_time"])
+        scored.append({**goal, "true_error": error, "within_tolerance": within, "time_s": time})
+    return scored
+
+
+def _unmeasured(
+    steps_total: int, sim_time: float, wall_time: float, status: str, goals_total: int = 0
+) -> dict[str, object]:
     """:func:`summarize` of a run without a sample: the same keys, nothing measured."""
     nothing = _stats(np.empty(0))
     return {
@@ -224,6 +270,9 @@ def _unmeasured(steps_total: int, sim_time: float, wall_time: float, status: str
         "completed": False,
         "steps_done": 0,
         "steps_total": steps_total,
+        "goals": [],
+        "goals_reached": 0,
+        "goals_total": goals_total,
         "contact_kept": False,
         **{key: dict(nothing) for key in ("theta_err_deg", "s_h_err_mm", "s_g_err_mm")},
         "kinematics_valid_share": 0.0,
@@ -249,7 +298,9 @@ def _run_inputs(result: RunResult, schedule: Schedule) -> tuple:
 
     data = load_record(result.folder).data if result.folder is not None else result.samples
     steps = [step.as_dict() for step in result.steps]
-    return data, steps, len(schedule.steps), result.sim_time, result.wall_time, result.status
+    goals = [goal.as_dict() for goal in result.goals]
+    motions, goals_total = len(schedule.motions), len(schedule.goals)
+    return data, steps, motions, result.sim_time, result.wall_time, result.status, goals, goals_total
 
 
 # --- verdicts -------------------------------------------------------------------------------------

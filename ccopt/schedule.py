@@ -12,8 +12,21 @@ CLI, use degrees and millimetres::
       - {motion: slide_ground, delta_mm: 10}
       - {motion: hold, duration_s: 1}
 
-Built in: ``paper`` (exploration — hand slides both ways, pivots both ways — then a long sequence
-in the paper's increments of 7.2°, 10 mm and 10 mm) and ``smoke`` (pivots both ways, for CI).
+A step may also be a **goal** (:class:`Goal`): a configuration to reach, absolute ``θ_o`` of the
+hand's face, absolute ``s_h``, ``s_g`` relative to the ground contact at the run's start; the
+planner (:mod:`ccopt.planning.planner`) picks the motions from the estimated statics. Omitted
+coordinates are free; tolerances default to 1° and 2 mm::
+
+    steps:
+      - {motion: explore}                  # learn what the planner needs (ends by itself)
+      - {motion: reach, theta_deg: 25}
+      - {motion: reach, s_h_mm: -8}
+      - {motion: reach, theta_deg: 10, s_h_mm: 0, s_g_mm: 0, timeout_s: 90, tolerance_deg: 1, tolerance_mm: 2}
+
+Built in: ``paper`` (the paper's experiment as goals: exploration, then goals in the paper's
+increments of 7.2°, 10 mm and 10 mm visiting both directions of every coordinate),
+``paper-script`` (the hand-scripted motions of the paper's sequences, which ask for motions the
+object may not allow) and ``smoke`` (pivots both ways, for CI).
 """
 
 from __future__ import annotations
@@ -24,6 +37,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 import yaml
@@ -93,6 +107,94 @@ class Step:
         return modes.driven_coordinate(self.kind)
 
 
+GOAL_TOLERANCE = (np.deg2rad(1.0), 0.002)
+"""Default goal tolerances: angle (rad), lengths (m)."""
+GOAL_TIMEOUT = 60.0
+"""Default time a goal may take, s."""
+
+
+@dataclass(frozen=True)
+class Goal:
+    """A configuration to reach: the planner (:mod:`ccopt.planning.planner`) turns it into motions.
+
+    Attributes:
+        theta_o: the angle of the hand's face ``θ_o`` to reach, rad (None: free).
+        s_h: the hand's sliding position ``s_h`` to reach, m (None: free).
+        s_g: the ground contact's position relative to where it was at the run's start, m
+            (None: free).
+        angle_tolerance: reached when ``|θ̂_o − theta_o|`` is at most this, rad.
+        length_tolerance: reached when ``|ŝ_h − s_h|`` and ``|ŝ_g − s_g|`` are at most this, m.
+        timeout: the goal gives up after this long, s.
+
+    Raises ``ValueError`` naming the value: no coordinate given, a number that is not finite, a
+    tolerance not positive, a timeout not in (0, :data:`MAX_TIMEOUT`], a target beyond half a turn
+    or a metre.
+    """
+
+    theta_o: float | None = None
+    s_h: float | None = None
+    s_g: float | None = None
+    angle_tolerance: float = GOAL_TOLERANCE[0]
+    length_tolerance: float = GOAL_TOLERANCE[1]
+    timeout: float = GOAL_TIMEOUT
+
+    kind: ClassVar[str] = "reach"
+    explore: ClassVar[bool] = False
+
+    def __post_init__(self) -> None:
+        targets = (("theta_o", np.pi), ("s_h", 1.0), ("s_g", 1.0))
+        if all(getattr(self, name) is None for name, _ in targets):
+            raise ValueError("a goal needs at least one of theta_o, s_h, s_g")
+        for name, largest in targets:
+            value = getattr(self, name)
+            if value is not None and abs(_number(value, f"goal {name}")) > largest:
+                raise ValueError(f"goal {name} must be at most {largest:g} in size, got {value!r}")
+        for name, largest in (("angle_tolerance", np.pi), ("length_tolerance", 1.0)):
+            value = _number(getattr(self, name), f"goal {name}")
+            if not 0.0 < value <= largest:
+                raise ValueError(f"goal {name} must be in (0, {largest:g}], got {value!r}")
+        if not 0.0 < _number(self.timeout, "goal timeout") <= MAX_TIMEOUT:
+            raise ValueError(f"goal timeout must be in (0, {MAX_TIMEOUT:g}] s, got {self.timeout!r}")
+
+    @property
+    def targets(self) -> tuple[float | None, float | None, float | None]:
+        """``(θ_o, s_h, s_g)`` to reach (rad, m, m; None where free)."""
+        return self.theta_o, self.s_h, self.s_g
+
+    @property
+    def tolerances(self) -> np.ndarray:
+        """Tolerances of ``(θ_o, s_h, s_g)`` (rad, m, m)."""
+        return np.array([self.angle_tolerance, self.length_tolerance, self.length_tolerance])
+
+    def errors(self, coordinates: np.ndarray, s_g_origin: float) -> np.ndarray:
+        """Target minus ``coordinates`` (``θ_o, s_h, s_g`` absolute, rad and m), 0 where free;
+        ``s_g`` measured from ``s_g_origin``."""
+        reference = np.array([0.0, 0.0, s_g_origin])
+        return np.array(
+            [0.0 if target is None else target + ref - value
+             for target, ref, value in zip(self.targets, reference, coordinates, strict=True)]
+        )
+
+    def reached(self, coordinates: np.ndarray, s_g_origin: float) -> bool:
+        """Whether every given coordinate is within its tolerance."""
+        return bool(np.all(np.abs(self.errors(coordinates, s_g_origin)) <= self.tolerances))
+
+
+def reach(
+    theta_deg: float | None = None,
+    s_h_mm: float | None = None,
+    s_g_mm: float | None = None,
+    timeout: float = GOAL_TIMEOUT,
+) -> Goal:
+    """A goal in degrees and millimetres (default tolerances)."""
+    return Goal(
+        None if theta_deg is None else float(np.deg2rad(theta_deg)),
+        None if s_h_mm is None else s_h_mm * 1e-3,
+        None if s_g_mm is None else s_g_mm * 1e-3,
+        timeout=timeout,
+    )
+
+
 def pivot(degrees: float, timeout: float = DEFAULT_TIMEOUT) -> Step:
     return Step("pivot", np.deg2rad(degrees), DEFAULT_TOLERANCE["pivot"], timeout)
 
@@ -145,11 +247,21 @@ class Schedule:
     """A named sequence of steps."""
 
     name: str
-    steps: tuple[Step, ...]
+    steps: tuple[Step | Goal, ...]
 
     def __post_init__(self) -> None:
         if not self.steps:
             raise ValueError(f"schedule {self.name!r} has no steps")
+
+    @property
+    def goals(self) -> tuple[Goal, ...]:
+        """The goal steps, in order."""
+        return tuple(step for step in self.steps if isinstance(step, Goal))
+
+    @property
+    def motions(self) -> tuple[Step, ...]:
+        """The motion steps (every step that is not a goal), in order."""
+        return tuple(step for step in self.steps if isinstance(step, Step))
 
     def to_dict(self) -> dict[str, object]:
         """The file form (degrees, millimetres), e.g. for ``meta.json``."""
@@ -157,6 +269,35 @@ class Schedule:
 
 
 def _paper() -> Schedule:
+    """The paper's experiment as goals (paper §VI, Fig. 9): learn, then visit both directions of every
+    coordinate in the paper's increments from the start (θ_o 17.2°, the hand over the ground contact),
+    some goals a single motion away, others needing the planner to tilt the object first (a ground
+    slide needs a large tilt, each way its own)."""
+    return Schedule(
+        "paper",
+        (
+            *exploration(),
+            reach(theta_deg=24.4),
+            reach(theta_deg=31.6),
+            reach(s_g_mm=10.0),
+            reach(s_h_mm=10.0),
+            reach(theta_deg=17.2),
+            reach(theta_deg=10.0),
+            reach(s_h_mm=0.0),
+            reach(s_g_mm=0.0),
+            reach(theta_deg=2.8),
+            reach(s_h_mm=-10.0),
+            reach(s_g_mm=-10.0),
+            reach(theta_deg=17.2, s_h_mm=0.0),
+            reach(s_g_mm=0.0),
+            reach(theta_deg=17.2, s_h_mm=0.0, s_g_mm=0.0),
+        ),
+    )
+
+
+def _paper_script() -> Schedule:
+    """The paper's sequences as a fixed script of motions (paper §VI), chosen by a person who could
+    see the object: on an unknown object many of its steps are impossible."""
     angle = np.rad2deg(PIVOT_STEP)
     slide = SLIDE_STEP * 1e3
     exploration = [hold(0.5), slide_hand(slide), slide_hand(-slide), pivot(angle), pivot(-angle)]
@@ -176,7 +317,7 @@ def _paper() -> Schedule:
         slide_hand(-slide),
         hold(0.5),
     ]
-    return Schedule("paper", tuple(exploration + manipulation))
+    return Schedule("paper-script", tuple(exploration + manipulation))
 
 
 def _smoke() -> Schedule:
@@ -186,7 +327,7 @@ def _smoke() -> Schedule:
     return Schedule("smoke", (hold(0.3), pivot(angle), pivot(-angle), pivot(-angle), pivot(angle), hold(0.3)))
 
 
-BUILTIN = {"paper": _paper, "smoke": _smoke}
+BUILTIN = {"paper": _paper, "paper-script": _paper_script, "smoke": _smoke}
 
 
 def load_schedule(name_or_path: str | Path) -> Schedule:
@@ -255,8 +396,10 @@ def _steps_from_dict(index: int, entry: object) -> tuple[Step, ...]:
             return exploration(**options)
         except ValueError as error:
             raise ValueError(f"{where}: {error}") from None
+    if kind == Goal.kind:
+        return (_goal_from_dict(where, entry),)
     if kind not in KINDS:
-        choices = ", ".join((*KINDS, "explore"))
+        choices = ", ".join((*KINDS, "explore", Goal.kind))
         raise ValueError(f"{where}: unknown motion {kind!r}; expected one of: {choices}")
     explore = entry.get("explore", False)
     if not isinstance(explore, bool):
@@ -288,6 +431,29 @@ def _step_from_dict(where: str, kind: str, entry: dict) -> Step:
         raise ValueError(message if message.startswith(where) else f"{where}: {message}") from None
 
 
+_GOAL_KEYS = ("theta_deg", "s_h_mm", "s_g_mm", "timeout_s", "tolerance_deg", "tolerance_mm")
+
+
+def _goal_from_dict(where: str, entry: dict) -> Goal:
+    _only(entry, {"motion", *_GOAL_KEYS}, where)
+
+    def value(key: str, scale: float, default: float | None = None) -> float | None:
+        return default if key not in entry else _number(entry[key], f"{where} {key}") * scale
+
+    try:
+        return Goal(
+            value("theta_deg", math.pi / 180.0),
+            value("s_h_mm", 1e-3),
+            value("s_g_mm", 1e-3),
+            value("tolerance_deg", math.pi / 180.0, GOAL_TOLERANCE[0]),
+            value("tolerance_mm", 1e-3, GOAL_TOLERANCE[1]),
+            value("timeout_s", 1.0, GOAL_TIMEOUT),
+        )
+    except ValueError as error:
+        message = str(error)
+        raise ValueError(message if message.startswith(where) else f"{where}: {message}") from None
+
+
 def _only(entry: dict, allowed: set[str], where: str) -> None:
     unknown = set(entry) - allowed
     if unknown:
@@ -312,8 +478,26 @@ def _number(value: object, name: str) -> float:
     return number
 
 
-def _step_to_dict(step: Step) -> dict[str, object]:
+def _step_to_dict(step: Step | Goal) -> dict[str, object]:
+    if isinstance(step, Goal):
+        return _goal_to_dict(step)
     return {**_motion_to_dict(step), **({"explore": True} if step.explore else {})}
+
+
+def _goal_to_dict(goal: Goal) -> dict[str, object]:
+    theta, s_h, s_g = goal.targets
+    given = {
+        "theta_deg": None if theta is None else float(np.rad2deg(theta)),
+        "s_h_mm": None if s_h is None else s_h * 1e3,
+        "s_g_mm": None if s_g is None else s_g * 1e3,
+    }
+    return {
+        "motion": Goal.kind,
+        **{key: value for key, value in given.items() if value is not None},
+        "tolerance_deg": float(np.rad2deg(goal.angle_tolerance)),
+        "tolerance_mm": goal.length_tolerance * 1e3,
+        "timeout_s": goal.timeout,
+    }
 
 
 def _motion_to_dict(step: Step) -> dict[str, object]:

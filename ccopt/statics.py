@@ -311,13 +311,16 @@ def best_wrench(
     motion: Motion | str,
     l_h: float,
     force_limits: tuple[float, float],
+    beyond: float = 0.0,
 ) -> StaticsResult:
     """The largest margin (N) of ``motion`` at ``(θ_o, s_h)`` (rad, m) and the hand wrench achieving it.
 
     ``l_h`` is the torque rows' lever (m; the hand's half-length, or its estimate's effective one)
-    and ``force_limits`` the normal force's ``(f_min, f_max)`` (N).
+    and ``force_limits`` the normal force's ``(f_min, f_max)`` (N); ``beyond`` as in
+    :func:`regulation_wrench`.
     """
-    return _solve(statics, (theta_o, s_h), Motion(motion), l_h, force_limits, _MAXIMISE_MARGIN)
+    motion = Motion(motion)
+    return _solve(statics, (theta_o, s_h), motion, l_h, force_limits, _MAXIMISE_MARGIN, beyond=beyond)
 
 
 def regulation_wrench(
@@ -437,6 +440,8 @@ class StepFeasibility:
         on_face: the whole hand stays on the face over the step.
         margin: the smaller LP margin of the step's two ends.
         feasible: ``on_face`` and ``margin ≥ min_margin``.
+        explore: the step is an exploration probe (:func:`ccopt.schedule.exploration`): it looks for
+            a limit and ends by itself, so its being impossible is no fault of the schedule.
     """
 
     index: int
@@ -447,6 +452,7 @@ class StepFeasibility:
     on_face: bool
     margin: float
     feasible: bool
+    explore: bool = False
 
     def describe(self) -> str:
         """One line in degrees and millimetres, e.g. for a warning."""
@@ -469,13 +475,17 @@ def schedule_feasibility(
     friction), which ccopt's estimator and controller never see. A step that is infeasible here
     cannot be done by any controller with a flush hand and a point ground contact; a step that is
     feasible may still fail (the reduced model ignores dynamics, and the object may roll onto
-    another vertex at large angles).
+    another vertex at large angles). Goal steps are not checked, nor anything after the first:
+    where a goal leaves the object is the planner's choice (:func:`ccopt.planning.planner.oracle_plan`
+    judges goals).
     """
     truth = true_statics(obj, start, hand)
     low, high = truth.s_h_range
     theta, s_h = truth.theta_o, truth.s_h
     checks = []
     for index, step in enumerate(steps):
+        if not isinstance(step, Step):
+            break
         end_theta = theta + (step.delta if step.kind == "pivot" else 0.0)
         end_s_h = s_h + (step.delta if step.kind == "slide_hand" else 0.0)
         on_face = all(low - 1e-9 <= s <= high + 1e-9 for s in (s_h, end_s_h))
@@ -485,12 +495,15 @@ def schedule_feasibility(
         )
         feasible = on_face and margin >= min_margin
         ends = ((theta, end_theta), (s_h, end_s_h))
-        checks.append(StepFeasibility(index, step.kind, step.delta, *ends, on_face, margin, feasible))
+        checks.append(
+            StepFeasibility(index, step.kind, step.delta, *ends, on_face, margin, feasible, step.explore)
+        )
         theta, s_h = end_theta, end_s_h
     return tuple(checks)
 
 
 def impossible_steps(checks: tuple[StepFeasibility, ...]) -> list[int]:
-    """Indices of the steps that :func:`schedule_feasibility` finds impossible."""
-    return [check.index for check in checks if not check.feasible]
+    """Indices of the steps that :func:`schedule_feasibility` finds impossible (exploration probes
+    aside: they look for the limits)."""
+    return [check.index for check in checks if not (check.feasible or check.explore)]
 

@@ -13,7 +13,7 @@ from scipy.spatial import ConvexHull
 
 from ccopt import contact, geometry
 from ccopt.estimation import Estimate, Estimator, EstimatorParams, GroundConeEstimator, GroundConeParams
-from ccopt.estimation.estimator import SlideEvidence
+from ccopt.estimation.estimator import SlideEvidence, ground_friction_faces
 from ccopt.estimation.ground_cone import FACE_COSINE_RANGE, FACE_WINDOW_STEPS
 from ccopt.hand import Hand
 from ccopt.modes import ContactConfiguration, ContactMode, Motion, configuration
@@ -382,3 +382,22 @@ def test_a_sticking_command_keeps_a_hull_edge_from_being_fitted_while_s_g_jitter
     assert min(largest_moves(s_g)) >= distance
     assert hull[-1] == (True, True)
     assert all(e.ground_fitted == (False, False) and math.isnan(e.mu_g) for e in estimates)
+
+
+@pytest.mark.parametrize("side", [0, 1])
+def test_one_known_ground_side_gives_the_other_as_its_mirror_image(side):
+    """Coulomb friction on a flat ground is the same both ways: a cone ``|f_x| ≤ μ f_y + c`` has rows
+    ``(±1, −μ)``-like faces mirrored about world up. From the true cone's one side, the other is the
+    true cone's other side; the sticking edge on the unknown side is dropped."""
+    true_rows, true_bounds = contact.model_ground_rows(0.6, 0.4)
+    rows, bounds = np.array(true_rows, dtype=float), np.array(true_bounds, dtype=float)
+    other = 1 - side
+    rows[other], bounds[other] = rows[other] * 0.5, bounds[other] * 3.0  # a sticking edge, not a face
+    fitted = (side == 0, side == 1)
+    faces, offsets, known = ground_friction_faces(rows, bounds, fitted)
+    assert known == (True, True)
+    np.testing.assert_allclose(faces, true_rows, atol=1e-12)
+    np.testing.assert_allclose(offsets, true_bounds, atol=1e-12)
+    faces, offsets, known = ground_friction_faces(rows, bounds, (False, False))
+    assert known == (False, False)
+    np.testing.assert_array_equal(faces, rows)

@@ -9,8 +9,25 @@ from ccopt import schedule
 from ccopt.modes import Motion
 
 
-def test_paper_schedule_explores_then_manipulates():
+def test_paper_schedule_explores_then_reaches_goals_both_ways_in_the_papers_increments():
     paper = schedule.load_schedule("paper")
+    assert all(step.explore for step in paper.motions)
+    assert paper.steps[: len(paper.motions)] == paper.motions
+    goals = paper.goals
+    assert len(goals) >= 10
+    start = (17.2, 0.0, 0.0)  # degrees, mm, mm: the paper's start tilt, hand and ground at their origin
+    increments = (7.2, 10.0, 10.0)
+    for index, (base, increment) in enumerate(zip(start, increments, strict=True)):
+        scale = np.rad2deg(1.0) if index == 0 else 1e3
+        given = [goal.targets[index] * scale for goal in goals if goal.targets[index] is not None]
+        multiples = (np.array(given) - base) / increment
+        assert np.allclose(multiples, np.round(multiples), atol=1e-9), given
+        assert min(multiples) <= -1 and max(multiples) >= 1, f"coordinate {index} visited one way only"
+    assert all(np.allclose(goal.tolerances, [np.deg2rad(1.0), 0.002, 0.002]) for goal in goals)
+
+
+def test_paper_script_explores_then_manipulates():
+    paper = schedule.load_schedule("paper-script")
     kinds = [step.kind for step in paper.steps]
     assert kinds[1:5] == ["slide_hand", "slide_hand", "pivot", "pivot"]
     assert {s.motion for s in paper.steps if s.kind == "slide_hand"} == {
@@ -92,3 +109,57 @@ def test_exploration_steps_are_not_scored():
     data = {"time": np.array([0.0, 1.0]), "true_coordinates": np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]])}
     probe = {"kind": "slide_hand", "delta": 0.003, "start_time": 0.0, "end_time": 1.0, "explore": True}
     assert metrics.realised_ratios(data, [probe]).size == 0
+
+
+def test_goal_steps_read_in_degrees_and_millimetres_with_free_coordinates(tmp_path):
+    path = tmp_path / "goals.yaml"
+    path.write_text(
+        "steps:\n"
+        "  - {motion: explore}\n"
+        "  - {motion: reach, theta_deg: 25}\n"
+        "  - {motion: reach, s_h_mm: -8}\n"
+        "  - {motion: reach, s_g_mm: 20}\n"
+        "  - {motion: reach, theta_deg: 10, s_h_mm: 0, s_g_mm: 0, timeout_s: 90, tolerance_deg: 2,"
+        " tolerance_mm: 3}\n"
+    )
+    loaded = schedule.load_schedule(path)
+    goals = loaded.goals
+    assert len(goals) == 4 and all(step.explore for step in loaded.motions)
+    assert goals[0].targets == (pytest.approx(np.deg2rad(25)), None, None)
+    assert goals[1].targets == (None, pytest.approx(-0.008), None)
+    assert goals[2].targets == (None, None, pytest.approx(0.020))
+    assert goals[0].tolerances == pytest.approx([np.deg2rad(1.0), 0.002, 0.002])
+    assert goals[3].timeout == 90.0
+    assert goals[3].tolerances == pytest.approx([np.deg2rad(2.0), 0.003, 0.003])
+    again = tmp_path / "again.json"
+    again.write_text(json.dumps(loaded.to_dict()))
+    assert schedule.load_schedule(again).steps == loaded.steps
+
+
+def test_a_goal_is_reached_within_its_tolerance_of_every_given_coordinate():
+    goal = schedule.Goal(theta_o=0.3, s_g=0.01)
+    origin = 0.05
+    at = np.array([0.3 + np.deg2rad(0.9), 0.123, origin + 0.01 - 0.0019])
+    assert goal.reached(at, origin)
+    assert goal.errors(at, origin)[1] == 0.0
+    assert not goal.reached(at + np.array([np.deg2rad(0.2), 0.0, 0.0]), origin)
+    assert not goal.reached(at, origin + 0.0002)
+
+
+@pytest.mark.parametrize(
+    ("entry", "message"),
+    [
+        ("{motion: reach}", "at least one of"),
+        ("{motion: reach, theta_deg: 200}", "theta_o"),
+        ("{motion: reach, s_h_mm: .nan}", "finite"),
+        ("{motion: reach, s_h_mm: 5, tolerance_mm: 0}", "length_tolerance"),
+        ("{motion: reach, s_h_mm: 5, timeout_s: -1}", "timeout"),
+        ("{motion: reach, s_h_mm: 5, speed: 2}", "unknown key"),
+    ],
+)
+def test_bad_goal_steps_name_the_step_and_value(tmp_path, entry, message):
+    path = tmp_path / "bad.yaml"
+    path.write_text(f"steps:\n  - {entry}\n")
+    with pytest.raises(ValueError, match=message) as error:
+        schedule.load_schedule(path)
+    assert "step 1" in str(error.value) or "steps[0]" in str(error.value) or "#1" in str(error.value)

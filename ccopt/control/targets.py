@@ -72,23 +72,27 @@ def estimated_statics(
     """The object's statics as the estimate knows them (None before the kinematics are known), with
     the hand friction ``mu_h`` instead of ``μ̂_h`` if given.
 
-    The gravity moment is the measured one at the current configuration (module docstring). A ground
-    row counts as known where it is the ground's friction face (``Estimate.ground_fitted``: the
-    ground slid that way); else it is only where the sticking forces seen end, which bounds nothing a
-    sticking motion may do. The row a ground slide of ``motion`` crosses is the exception: its
-    estimate, a face of the sticking forces inside the true one, is where that slide is sought.
+    The gravity moment is the model's where it is valid, else the measured one at the current
+    configuration (module docstring). The ground rows are the friction faces as far as they are
+    known (``Estimate.friction_faces``: a side the ground slid past, and the other side its mirror
+    image); an unknown side is only where the sticking forces seen end, which bounds nothing a
+    sticking motion may do. The row a ground slide of ``motion`` crosses, when unknown, is the
+    exception: its hull estimate, inside the true face, is where that slide is sought.
     """
     values = (estimate.d, estimate.s_h, estimate.mu_h, *estimate.wrench)
     if not (estimate.kinematics_valid and all(map(math.isfinite, values))):
         return None
     gravity = _gravity(estimate, hand_angle)
-    rows, bounds = np.asarray(estimate.ground_rows), np.asarray(estimate.ground_bounds)
+    faces, face_bounds, known_faces = estimate.friction_faces
+    rows, bounds = np.array(faces), np.array(face_bounds)
+    known = list(known_faces)
+    for row in REMOVED_ROWS[motion] if motion is not None else ():
+        side = GROUND_ROWS.index(row) if row in GROUND_ROWS else None
+        if side is not None and not known[side]:  # the crossed row from the hull
+            rows[side], bounds[side] = estimate.ground_rows[side], estimate.ground_bounds[side]
+            known[side] = True
     if not (np.all(np.isfinite(rows)) and np.all(np.isfinite(bounds))):
         return None
-    known = list(estimate.ground_fitted)
-    for row in REMOVED_ROWS[motion] if motion is not None else ():
-        if row in GROUND_ROWS:
-            known[GROUND_ROWS.index(row)] = True
     friction = estimate.mu_h if mu_h is None else mu_h
     return statics.ObjectStatics(friction, rows, bounds, estimate.d, gravity, tuple(known))
 

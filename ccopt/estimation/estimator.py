@@ -193,6 +193,11 @@ class Estimate:
     compliance_std: float = math.nan
     gravity: GravityEstimate = UNKNOWN_GRAVITY
     hand_slid: bool = False
+    @property
+    def friction_faces(self) -> tuple[np.ndarray, np.ndarray, tuple[bool, bool]]:
+        """``(A, b, known)``, the ground's friction faces as far as they are known
+        (:func:`ground_friction_faces`): what the statics of a motion and the planner judge with."""
+        return ground_friction_faces(self.ground_rows, self.ground_bounds, self.ground_fitted)
 
     @property
     def kinematics_valid(self) -> bool:
@@ -356,6 +361,25 @@ def _sliding_way(commanded: ContactMode | None, fallback: int | None = 0) -> int
     end at is reported as a face, the kinematics then follow the ground (a cheap false alarm for
     them), and a pivot's rotation through a slightly wrong ``d`` would pass for a slide."""
     return int(commanded) if commanded is not None else fallback
+
+
+def ground_friction_faces(
+    rows: np.ndarray, bounds: np.ndarray, fitted: tuple[bool, bool]
+) -> tuple[np.ndarray, np.ndarray, tuple[bool, bool]]:
+    """``(A, b, known)``: the ground rows as friction faces. A side the ground slid past is its hull
+    face; once one side is known, the other is its mirror image about world up (Coulomb friction is
+    the same both ways on a flat ground, and the weight, so the cone's apex, is on the vertical
+    through the origin of the force plane): far nearer the truth than the edge of the sticking
+    forces seen on that side, which lies wherever the forces happened to stop (on a goal run of the
+    paper triangle, ground slides planned on it were tried at four tilts before the one that works).
+    Neither side known: both unknown."""
+    faces, offsets = np.array(rows, dtype=float), np.array(bounds, dtype=float)
+    if fitted[0] != fitted[1]:
+        source, target = (0, 1) if fitted[0] else (1, 0)
+        faces[target] = faces[source] * (-1.0, 1.0)
+        offsets[target] = offsets[source]
+        return faces, offsets, (True, True)
+    return faces, offsets, fitted
 
 
 class SlideEvidence:

@@ -148,6 +148,8 @@ class KinematicsParams:
         hand_slip_gate: with the hand reported sliding but commanded (so assumed) sticking, an
             eq. 16 innovation beyond this many predicted standard deviations means it slid (a
             slow creep would pass the ``gate``).
+        follow_height_noise: while the ground slides, the ground contact's height ``y_o`` may drift
+            by this standard deviation a sample (m; :meth:`KinematicEstimator._follow_ground`).
     """
 
     excitation_angle: float = math.radians(0.25)
@@ -164,6 +166,7 @@ class KinematicsParams:
     slip_gate: float = 2.0
     slip_samples: int = 3
     hand_slip_gate: float = 4.0
+    follow_height_noise: float = 1e-4
 
     def __post_init__(self) -> None:
         check_number("excitation_angle", self.excitation_angle, low_open=False)
@@ -180,6 +183,7 @@ class KinematicsParams:
         check_number("slip_gate", self.slip_gate)
         check_count("slip_samples", self.slip_samples)
         check_number("hand_slip_gate", self.hand_slip_gate)
+        check_number("follow_height_noise", self.follow_height_noise, low_open=False)
 
 
 @dataclass(frozen=True)
@@ -247,6 +251,7 @@ class KinematicEstimator:
         self._prior_variance = self.params.prior_std**2
         self._gate_squared = self.params.gate**2
         self._slip_gate_squared = self.params.slip_gate**2
+        self._height_variance = self.params.follow_height_noise**2
         self._hand_slip_gate_squared = self.params.hand_slip_gate**2
         params = self.params
         self._state = [0.0, 0.0, 0.0, 0.0, params.compliance_prior, params.normal_compliance_prior]
@@ -385,9 +390,12 @@ class KinematicEstimator:
         ``s_h`` both (hand sliding too); eqs. 15–16 give them. Keeping ``y_o`` also lets a sticking
         hand's ``s_h`` be found again after a moment out of contact (a slide's start can lift the
         object off the hand for 10 ms), which releasing ``y_o`` too would leave unobservable until
-        the next pivots."""
+        the next pivots; it is let drift by ``follow_height_noise`` a sample (the ground contact
+        sinks into the ground with the normal force, which a fixed ``y_o`` would put into ``x_o``:
+        0.1 mm/N on a closed-loop goal run of the paper triangle)."""
         if hand_sticks:
             self._release(X_O)
+            self._cov[Y_O][Y_O] += self._height_variance  # the contact sinks as the force changes
         else:
             self._release(X_O, S_H)
         self._measure_normal(pose, frame)

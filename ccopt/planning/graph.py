@@ -37,6 +37,9 @@ class GraphParams:
         theta_range: ``(θ_min, θ_max)`` the robot may take the object to.
         s_h_range: ``(s_h_min, s_h_max)`` over which the whole hand lies on the face.
         min_margin: margin every point of an edge needs.
+        slide_beyond: a ground slide is judged with its contact this far (N) past its row
+            (:func:`ccopt.statics.regulation_wrench`'s ``beyond``: an estimated row lies inside the
+            true one, and the controller pushes past it).
     """
 
     pivot_step: float = math.radians(7.2)
@@ -46,6 +49,7 @@ class GraphParams:
     theta_range: tuple[float, float] = (math.radians(-40.0), math.radians(50.0))
     s_h_range: tuple[float, float] = (-0.05, 0.05)
     min_margin: float = 1.0
+    slide_beyond: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("pivot_step", "s_h_step", "ground_slide"):
@@ -59,6 +63,9 @@ class GraphParams:
             raise ValueError(f"min_margin must be a finite number of N, got {self.min_margin!r}")
         if not (self.theta_range[0] < self.theta_range[1] and self.s_h_range[0] <= self.s_h_range[1]):
             raise ValueError(f"empty ranges: θ {self.theta_range}, s_h {self.s_h_range}")
+
+
+_GROUND_SLIDES = (Motion.SLIDE_GROUND_POS, Motion.SLIDE_GROUND_NEG)
 
 
 @dataclass(frozen=True, order=True)
@@ -91,7 +98,8 @@ class ConfigurationGraph:
     """The motions the statics ``known`` allow around ``(θ_start, s_h_start)``.
 
     Args:
-        known: the object's statics (true or estimated).
+        known: the object's statics (true or estimated), or per motion (an estimate knows a ground
+            row differently for a motion that keeps the ground and one that slides it across).
         start: ``(θ_o, s_h)`` of the grid's origin node, rad and m.
         lever: the torque rows' lever ``l_h`` (m) and ``force_limits`` ``(f_min, f_max)`` (N).
         params: grid and margin.
@@ -100,7 +108,7 @@ class ConfigurationGraph:
 
     def __init__(
         self,
-        known: ObjectStatics,
+        known: ObjectStatics | Callable[[Motion], ObjectStatics],
         start: tuple[float, float],
         lever: float,
         force_limits: tuple[float, float],
@@ -143,7 +151,9 @@ class ConfigurationGraph:
         key = (node, motion)
         if key not in self._margins:
             theta, s_h = self.configuration(node)
-            result = statics.best_wrench(self.known, theta, s_h, motion, self.lever, self.force_limits)
+            known = self.known(motion) if callable(self.known) else self.known
+            beyond = self.params.slide_beyond if motion in _GROUND_SLIDES else 0.0
+            result = statics.best_wrench(known, theta, s_h, motion, self.lever, self.force_limits, beyond)
             self._margins[key] = result.margin
         return self._margins[key]
 

@@ -98,6 +98,7 @@ def possible_tour(
     way = {kind: 1 for kind in SLIDE_KINDS}
     s_g = 0.0
     stuck = 0
+
     def wanting() -> bool:
         return len(edges) < steps or any(done[k] < slides and sum(allowed[k].values()) for k in SLIDE_KINDS)
 
@@ -175,6 +176,7 @@ def vertex_range(
 ) -> tuple[float, float]:
     """The face angles ``θ_o`` (rad) over which the object keeps resting on the vertex it starts on
     (the experimenter's geometry: beyond, another vertex touches the ground)."""
+
     def vertex(theta: float) -> int:
         angle = geometry.object_angle_for_face(obj.face_normal(obj.face_index(start.hand_face)), theta)
         return geometry.lowest_vertex(geometry.transform_points(obj.vertices, (0.0, 0.0, angle)))

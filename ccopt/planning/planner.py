@@ -1,0 +1,383 @@
+"""Goals into motions: the next admissible motion towards a goal, from what the statics allow.
+
+The paper's sequences were scripted by a person who could see the object; its future work is a
+layer that sequences contact configurations automatically. :func:`next_motion` is that layer, one
+motion at a time: it builds the :class:`~ccopt.planning.graph.ConfigurationGraph` of the statics it
+is given around the current configuration (``θ_o`` in the paper's 7.2° pivots, ``s_h`` on a 5 mm
+grid with 10 mm hand slides; a ground slide is a loop on a node) and
+
+1. if the goal moves the ground contact (``s_g``) by more than its tolerance, goes to the nearest
+   node where a ground slide that way is possible with margin, and slides (10 mm, or what is left);
+2. else goes to the node nearest the goal's ``(θ_o, s_h)`` by the fewest motions;
+3. from there, closes the rest with one partial pivot or hand slide, if the statics allow it.
+
+Only the first motion of a path is returned: the caller executes it and asks again with the new
+estimate, so every plan uses the statics as they are then known
+(:func:`ccopt.control.targets.estimated_statics`: ground rows the ground was seen sliding past,
+``μ̂_h``, the gravity moment). Where no sequence
+reaches the goal the answer is ``unreachable``, with the coordinate that blocks and why; a caller
+that may explore (the hand friction ``μ̂_h`` is a lower bound until the hand slides) asks again with
+bolder statics (:attr:`Plan.explores`). The same function on the *true* statics is the
+experimenter's oracle (:func:`oracle_plan`).
+
+Coordinates: ``θ_o`` (rad) and ``s_h`` (m) as the estimator reports them; ``s_g`` (m) relative to the
+ground contact at the run's start (``s_g_origin``). The planner never leaves ``reach`` (the robot's
+hand angles, which are the flush face's) nor the band of ``s_h`` between the start and the goal
+widened by :attr:`PlannerParams.s_h_span` (the estimator does not know where the face ends).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from ccopt import statics
+from ccopt.modes import Motion, motion_of
+from ccopt.planning.graph import ConfigurationGraph, Edge, GraphParams, Node
+from ccopt.planning.tour import reachable_nodes
+from ccopt.schedule import DEFAULT_TIMEOUT, DEFAULT_TOLERANCE, PIVOT_STEP, SLIDE_STEP, Goal, Step
+from ccopt.statics import ObjectStatics
+from ccopt.validation import check_number
+
+PLAN_STATUSES = ("move", "reached", "unreachable")
+"""What a plan says: take :attr:`Plan.motion`; the goal is reached; no sequence reaches it."""
+COORDINATE_NAMES = ("θ_o", "s_h", "s_g")
+
+StaticsOf = Callable[[Motion], ObjectStatics]
+"""The statics a motion is judged on (per motion: an estimate knows a ground row differently for a
+motion that keeps the ground and for one that slides across it)."""
+
+
+@dataclass(frozen=True)
+class PlannerParams:
+    """How the planner searches. Angles in rad, lengths in m, forces in N.
+
+    Attributes:
+        margin: every planned motion keeps at least this statics margin at both ends and between.
+        pivot_step: the grid's ``θ_o`` step and a full pivot (the paper's 7.2°).
+        s_h_step: the grid's ``s_h`` step.
+        hand_slide: a full hand slide (a multiple of ``s_h_step``; the paper's 10 mm).
+        ground_slide: a full ground slide (the paper's 10 mm).
+        s_h_span: how far beyond the current and the goal's ``s_h`` a plan may take the hand.
+        motion_timeout: the timeout of each planned motion, s.
+        slide_beyond: ground slides are judged this far (N) past their row, as the controller's
+            statics target puts them (:attr:`ccopt.control.controller.ControllerParams.slide_beyond`).
+        aim: the share of a goal's tolerances the plan aims within: the estimate errs by up to a
+            millimetre where the truth is (the ground contact after a slide, the run's start), and
+            a goal is only reached if the truth is within the whole tolerance.
+    """
+
+    margin: float = 1.0
+    pivot_step: float = PIVOT_STEP
+    s_h_step: float = 0.005
+    hand_slide: float = SLIDE_STEP
+    ground_slide: float = SLIDE_STEP
+    s_h_span: float = 0.02
+    motion_timeout: float = DEFAULT_TIMEOUT
+    slide_beyond: float = 0.0
+    aim: float = 0.5
+
+    def __post_init__(self) -> None:
+        check_number("margin", self.margin, low_open=False)
+        for name in ("pivot_step", "s_h_step", "hand_slide", "ground_slide", "motion_timeout"):
+            check_number(name, getattr(self, name))
+        check_number("s_h_span", self.s_h_span, low_open=False)
+        check_number("aim", self.aim, 0.0, 1.0)
+
+
+@dataclass(frozen=True)
+class Plan:
+    """The planner's answer.
+
+    Attributes:
+        status: one of :data:`PLAN_STATUSES`.
+        motion: the motion to take now (``move``), else None.
+        reason: why the goal is unreachable (one line), else "".
+        path: the motions planned from here (the first is ``motion``, partial moves aside).
+        explores: whether the plan relies on statics bolder than the estimate's (the hand friction
+            one step beyond ``μ̂_h``).
+    """
+
+    status: str
+    motion: Step | None = None
+    reason: str = ""
+    path: tuple[Edge, ...] = ()
+    explores: bool = False
+
+
+REACHED = Plan("reached")
+
+
+def next_motion(
+    statics_of: StaticsOf,
+    where: tuple[float, float, float],
+    goal: Goal,
+    s_g_origin: float,
+    reach: tuple[float, float],
+    lever: float,
+    force_limits: tuple[float, float],
+    params: PlannerParams | None = None,
+    face: tuple[float, float] | None = None,
+    failed_slides: dict[int, float] | None = None,
+) -> Plan:
+    """The next motion towards ``goal`` from ``where = (θ_o, s_h, s_g)`` (see the module docstring).
+
+    ``lever`` is the torque rows' lever (m) and ``force_limits`` the normal force range (N) the
+    statics are judged with; ``reach`` the ``θ_o`` range (rad) the robot may take the object to;
+    ``face`` the range of ``s_h`` (m) over which the hand lies on the face, where known (the
+    experimenter's oracle; the estimator does not know where the face ends); ``failed_slides``
+    the tilts ``θ_o`` (rad) at which a ground slide each way (``+1``, ``-1``) was tried and did not
+    start: a slide towards ``±s_g`` is then sought only at tilts beyond, further that way (tilting
+    the hand's normal towards the slide is what lets the hand push the object along).
+    """
+    params = params or PlannerParams()
+    errors = goal.errors(np.asarray(where, dtype=float), s_g_origin)
+    tolerances = params.aim * goal.tolerances
+    if np.all(np.abs(errors) <= tolerances):
+        return REACHED
+    graph = _graph(statics_of, where, goal, reach, lever, force_limits, params, face)
+    if abs(errors[2]) > tolerances[2]:
+        return _towards_ground(graph, errors[2], goal, statics_of, lever, params, failed_slides or {})
+    return _towards_configuration(
+        graph, where, errors, tolerances, goal, statics_of, lever, force_limits, params
+    )
+
+
+def _graph(
+    statics_of: StaticsOf,
+    where: tuple[float, float, float],
+    goal: Goal,
+    reach: tuple[float, float],
+    lever: float,
+    force_limits: tuple[float, float],
+    params: PlannerParams,
+    face: tuple[float, float] | None,
+) -> ConfigurationGraph:
+    theta, s_h, _ = where
+    target = s_h if goal.s_h is None else goal.s_h
+    band = (min(s_h, target) - params.s_h_span, max(s_h, target) + params.s_h_span)
+    if face is not None:
+        band = (max(band[0], min(face[0], s_h)), min(band[1], max(face[1], s_h)))
+    low, high = min(reach[0], theta), max(reach[1], theta)
+    grid = GraphParams(
+        pivot_step=params.pivot_step,
+        s_h_step=params.s_h_step,
+        hand_slide=params.hand_slide,
+        ground_slide=params.ground_slide,
+        theta_range=(low, high),
+        s_h_range=band,
+        min_margin=params.margin,
+        slide_beyond=params.slide_beyond,
+    )
+    return ConfigurationGraph(statics_of, (theta, s_h), lever, force_limits, grid)
+
+
+def _towards_ground(
+    graph: ConfigurationGraph,
+    error: float,
+    goal: Goal,
+    statics_of: StaticsOf,
+    lever: float,
+    params: PlannerParams,
+    failed: dict[int, float],
+) -> Plan:
+    """Slide the ground contact ``error`` (m) closer, going first where the slide is possible."""
+    sign = 1.0 if error > 0.0 else -1.0
+    tried = failed.get(int(sign))
+
+    def slides(node: Node) -> Edge | None:
+        if tried is not None and (graph.configuration(node)[0] - tried) * sign <= 1e-9:
+            return None
+        return next((e for e in graph.edges(node) if e.kind == "slide_ground" and e.delta * sign > 0.0), None)
+
+    path = graph.shortest_path(Node(0, 0), lambda node: slides(node) is not None, _motion_cost)
+    if path is None:
+        way = "+" if sign > 0 else "−"
+        return Plan(
+            "unreachable",
+            reason=f"s_g {_length(goal.s_g)}: no ground slide towards {way}s_g is possible at any tilt "
+            f"in {_degrees(graph.params.theta_range)}{_limits(statics_of, lever)}",
+        )
+    if path:
+        return _move(path[0], params, tuple(path))
+    length = sign * min(abs(error), graph.params.ground_slide)
+    return Plan("move", _step("slide_ground", length, params), path=(slides(Node(0, 0)),))
+
+
+def _towards_configuration(
+    graph: ConfigurationGraph,
+    where: tuple[float, float, float],
+    errors: np.ndarray,
+    tolerances: np.ndarray,
+    goal: Goal,
+    statics_of: StaticsOf,
+    lever: float,
+    force_limits: tuple[float, float],
+    params: PlannerParams,
+) -> Plan:
+    """Go to a node within half a step of the goal's ``(θ_o, s_h)`` from where the rest closes with
+    partial motions that keep the margin, by the fewest motions; then close it."""
+    grid = graph.params
+    half = np.array([0.5 * grid.pivot_step, 0.5 * grid.hand_slide])
+
+    def rest(node: Node) -> list[tuple[str, float]]:
+        theta, s_h = graph.configuration(node)
+        left = errors[:2] - (theta - where[0], s_h - where[1])
+        return [
+            (kind, float(left[k]))
+            for k, kind in ((0, "pivot"), (1, "slide_hand"))
+            if abs(left[k]) > tolerances[k]
+        ]
+
+    def near(node: Node) -> bool:
+        theta, s_h = graph.configuration(node)
+        left = errors[:2] - (theta - where[0], s_h - where[1])
+        if np.any(np.abs(left) > half + 1e-12):
+            return False
+        return _closing_margin((theta, s_h), rest(node), statics_of, lever, force_limits) >= params.margin
+
+    path = graph.shortest_path(Node(0, 0), near, _motion_cost)
+    if path is None:
+        return Plan("unreachable", reason=_blocked(graph, where, errors, goal, statics_of, lever))
+    if path:
+        return _move(path[0], params, tuple(path))
+    closing = rest(Node(0, 0))
+    if not closing:
+        return REACHED
+    kind, delta = closing[0]
+    return Plan("move", _step(kind, delta, params))
+
+
+def _closing_margin(
+    start: tuple[float, float],
+    motions: list[tuple[str, float]],
+    statics_of: StaticsOf,
+    lever: float,
+    force_limits: tuple[float, float],
+) -> float:
+    """The smallest margin of partial motions taken in turn from ``start`` (at both ends of each)."""
+    least, (theta, s_h) = math.inf, start
+    for kind, delta in motions:
+        motion = motion_of(kind, delta)
+        known = statics_of(motion)
+        end = (theta + delta, s_h) if kind == "pivot" else (theta, s_h + delta)
+        for point in ((theta, s_h), end):
+            least = min(least, statics.best_wrench(known, *point, motion, lever, force_limits).margin)
+        theta, s_h = end
+    return least
+
+
+def _move(edge: Edge, params: PlannerParams, path: tuple[Edge, ...]) -> Plan:
+    return Plan("move", _step(edge.kind, edge.delta, params), path=path)
+
+
+def _step(kind: str, delta: float, params: PlannerParams) -> Step:
+    tolerance = min(DEFAULT_TOLERANCE[kind], 0.5 * abs(delta))
+    return Step(kind, delta, tolerance, params.motion_timeout)
+
+
+def _motion_cost(edge: Edge) -> float:
+    """Every motion costs one; a hand slide a little more (it is the slowest and the least robust)."""
+    return 1.2 if edge.kind == "slide_hand" else 1.0
+
+
+def _blocked(
+    graph: ConfigurationGraph,
+    where: tuple[float, float, float],
+    errors: np.ndarray,
+    goal: Goal,
+    statics_of: StaticsOf,
+    lever: float,
+) -> str:
+    """Why no path reaches the goal's ``(θ_o, s_h)``: the coordinate that cannot get there."""
+    grid = graph.params
+    if goal.s_h is not None and abs(errors[1]) > goal.length_tolerance:
+        sign = 1 if errors[1] > 0 else -1
+        nodes = reachable_nodes(graph, Node(0, 0))
+        ways = [e for n in nodes for e in graph.edges(n) if e.kind == "slide_hand" and e.delta * sign > 0]
+        if not ways:
+            way = "+" if sign > 0 else "−"
+            return (
+                f"s_h {_length(goal.s_h)}: no hand slide towards {way}s_h is possible at any tilt in "
+                f"{_degrees(grid.theta_range)}{_limits(statics_of, lever)}"
+            )
+    if goal.theta_o is not None:
+        return (
+            f"θ_o {math.degrees(goal.theta_o):.1f}°: no sequence of pivots and hand slides keeps "
+            f"{grid.min_margin:.1f} N of margin on the way (reach {_degrees(grid.theta_range)})"
+            f"{_limits(statics_of, lever)}"
+        )
+    return (
+        f"s_h {_length(goal.s_h)}: no sequence of motions keeps {grid.min_margin:.1f} N of margin on the way"
+    )
+
+
+def _limits(statics_of: StaticsOf, lever: float) -> str:
+    mu_h = statics_of(Motion.HOLD).mu_h
+    return f" with μ_h {mu_h:.2f}, l_h {lever * 1e3:.0f} mm"
+
+
+def _degrees(interval: tuple[float, float]) -> str:
+    return f"[{math.degrees(interval[0]):.0f}°, {math.degrees(interval[1]):.0f}°]"
+
+
+def _length(value: float | None) -> str:
+    return "free" if value is None else f"{value * 1e3:+.0f} mm"
+
+
+def _amount(kind: str, delta: float) -> str:
+    return f"{math.degrees(delta):+.1f}°" if kind == "pivot" else f"{delta * 1e3:+.1f} mm"
+
+
+@dataclass(frozen=True)
+class OracleAnswer:
+    """What the planner does with the true statics, motion by motion, as if every motion did exactly
+    what it commanded (the experimenter's oracle; the estimator and the controller never see it).
+
+    Attributes:
+        status: ``reached`` or ``unreachable`` (also when ``max_motions`` run out, with the reason).
+        motions: the motions, in order.
+        reason: why unreachable.
+        where: the nominal configuration at the end ``(θ_o, s_h, s_g)`` (rad, m; ``s_g`` absolute).
+    """
+
+    status: str
+    motions: tuple[Step, ...]
+    reason: str
+    where: tuple[float, float, float]
+
+
+def oracle_plan(
+    true_statics: ObjectStatics,
+    where: tuple[float, float, float],
+    goal: Goal,
+    s_g_origin: float,
+    reach: tuple[float, float],
+    lever: float,
+    force_limits: tuple[float, float],
+    params: PlannerParams | None = None,
+    face: tuple[float, float] | None = None,
+    max_motions: int = 60,
+) -> OracleAnswer:
+    """Plan ``goal`` on the true statics from ``where``, applying each motion nominally; ``reach``
+    should be narrowed to where the object stays on its vertex and ``face`` given
+    (:func:`ccopt.planning.tour.vertex_range`, :func:`ccopt.statics.true_statics`)."""
+    position = np.asarray(where, dtype=float)
+    motions: list[Step] = []
+
+    def statics_of(motion: Motion) -> ObjectStatics:
+        return true_statics
+
+    for _ in range(max_motions):
+        plan = next_motion(
+            statics_of, tuple(position), goal, s_g_origin, reach, lever, force_limits, params, face
+        )
+        if plan.status != "move":
+            return OracleAnswer(plan.status, tuple(motions), plan.reason, tuple(position))
+        motions.append(plan.motion)
+        position[plan.motion.coordinate] += plan.motion.delta
+    reason = f"no plan within {max_motions} motions"
+    return OracleAnswer("unreachable", tuple(motions), reason, tuple(position))

@@ -1,0 +1,206 @@
+"""Goal steps at run time: the motions a goal needs, planned one at a time on the estimated statics.
+
+A closed loop that meets a :class:`~ccopt.schedule.Goal` hands it to a :class:`GoalSequencer`, which
+answers, every time a motion ends, with the next motion or with how the goal ended:
+
+* **explore** — while the kinematics are not yet usable the statics cannot be judged: the
+  exploration of :func:`ccopt.schedule.exploration` runs first (once per goal);
+* **move** — :func:`ccopt.planning.planner.next_motion` on the statics the estimate knows *now*
+  (:func:`ccopt.control.targets.estimated_statics`, per motion), from the estimated configuration;
+  where that finds no sequence and the hand has not yet slid, again with the hand friction one
+  step beyond ``μ̂_h`` (the estimate is a lower bound: the controller explores it on the way);
+* ``reached`` — every given coordinate is within its tolerance, by the estimate;
+* ``unreachable`` — no sequence reaches it under the estimate, with the planner's reason;
+* ``timeout`` — the goal's time ran out;
+* ``failed`` — the estimate became unusable, or :attr:`GoalSequencer.max_misses` planned motions
+  in a row did not do what they commanded.
+
+``s_g`` goals are measured from ``s_g_origin``, the estimated ground contact when the kinematics
+first became usable (the run's start, unless the ground slid before).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ccopt.control.targets import TargetGoal, estimated_statics
+from ccopt.estimation.estimator import Estimate
+from ccopt.modes import Motion
+from ccopt.planning.planner import Plan, PlannerParams, next_motion
+from ccopt.schedule import Goal, Step, exploration
+from ccopt.statics import ObjectStatics
+
+GOAL_STATUSES = ("reached", "unreachable", "timeout", "failed")
+"""How a goal can end (see the module docstring)."""
+
+
+@dataclass(frozen=True)
+class GoalResult:
+    """How one goal step went, by the estimate (truth is scored in :mod:`ccopt.metrics`).
+
+    Attributes:
+        index: the goal's position in the schedule.
+        goal: the goal.
+        start_time, end_time: simulated times, s.
+        status: one of :data:`GOAL_STATUSES`.
+        reason: why it ended so, one line ("" when reached).
+        motions: how many motions it used (exploration included).
+    """
+
+    index: int
+    goal: Goal
+    start_time: float
+    end_time: float
+    status: str
+    reason: str = ""
+    motions: int = 0
+
+    def as_dict(self) -> dict[str, object]:
+        """The result as ``meta.json`` stores it (targets in degrees and millimetres, as given)."""
+        theta, s_h, s_g = self.goal.targets
+        return {
+            "index": self.index,
+            "targets": {
+                "theta_deg": None if theta is None else math.degrees(theta),
+                "s_h_mm": None if s_h is None else 1e3 * s_h,
+                "s_g_mm": None if s_g is None else 1e3 * s_g,
+            },
+            "tolerance_deg": math.degrees(self.goal.angle_tolerance),
+            "tolerance_mm": 1e3 * self.goal.length_tolerance,
+            "start_time": self.start_time,
+            "end_time": self.end_time,
+            "status": self.status,
+            "reason": self.reason,
+            "motions": self.motions,
+        }
+
+
+class GoalSequencer:
+    """The motions of one goal (see the module docstring).
+
+    Args:
+        index: the goal's position in the schedule.
+        goal: the goal.
+        start_time: when it begins, s.
+        reach: the hand angles the robot reaches (rad): the flush face's ``θ_o``.
+        aim: force limits and margin of the estimated statics (:class:`~ccopt.control.targets.TargetGoal`;
+            its headroom narrows the planner's force range, its friction step is the exploration).
+        params: the planner's parameters.
+    """
+
+    max_misses = 3
+
+    def __init__(
+        self,
+        index: int,
+        goal: Goal,
+        start_time: float,
+        reach: tuple[float, float],
+        aim: TargetGoal,
+        params: PlannerParams | None = None,
+    ) -> None:
+        self.index = index
+        self.goal = goal
+        self.start_time = start_time
+        self.reach = reach
+        self.aim = aim
+        self.params = params or PlannerParams()
+        self.motions = 0
+        self.misses = 0
+        self.failed_slides: dict[int, float] = {}
+        """Per way (``±1``), the tilt (rad) of the last ground slide that did not start."""
+        self._exploration: list[Step] | None = None
+        self._last: tuple[Step, float] | None = None  # the last motion and the tilt it began at
+
+    def next(
+        self, now: float, estimate: Estimate, s_g_origin: float | None, last_status: str | None = None
+    ) -> Step | GoalResult:
+        """The next motion, or how the goal ended; ``last_status`` is how the previous motion of this
+        goal ended (None at the start)."""
+        self.misses = 0 if last_status in (None, "reached") else self.misses + 1
+        if self._last is not None and last_status not in (None, "reached"):
+            step, tilt = self._last
+            if step.kind == "slide_ground":
+                self.failed_slides[1 if step.delta > 0 else -1] = tilt
+        if now - self.start_time >= self.goal.timeout:
+            return self.end(now, "timeout", f"the goal's {self.goal.timeout:g} s ran out")
+        if self.misses >= self.max_misses:
+            return self.end(now, "failed", f"{self.misses} planned motions in a row were not reached")
+        usable = _usable(estimate) and s_g_origin is not None
+        if self._exploration is None and not usable:
+            self._exploration = list(exploration())
+        if self._exploration:
+            return self._take(self._exploration.pop(0))
+        if not usable:
+            return self.end(now, "failed", "the kinematics are unknown after exploring")
+        plan = self._plan(estimate, s_g_origin)
+        if plan.status == "reached":
+            return self.end(now, "reached")
+        if plan.status == "unreachable":
+            return self.end(now, "unreachable", plan.reason)
+        self._last = (plan.motion, float(estimate.theta_o))
+        return self._take(plan.motion)
+
+    def _plan(self, estimate: Estimate, s_g_origin: float) -> Plan:
+        where = (float(estimate.theta_o), float(estimate.s_h), float(estimate.s_g))
+        f_min, f_max = self.aim.force_limits
+        forces = (f_min, f_max - self.aim.headroom)
+
+        def plan_with(mu_h: float | None) -> Plan:
+            return next_motion(
+                _statics_of(estimate, mu_h),
+                where,
+                self.goal,
+                s_g_origin,
+                self.reach,
+                estimate.torque_lever,
+                forces,
+                self.params,
+                failed_slides=self.failed_slides,
+            )
+
+        plan = plan_with(None)
+        if plan.status != "unreachable" or estimate.hand_slid or self.aim.friction_step <= 0.0:
+            return plan
+        bolder = plan_with(estimate.mu_h + self.aim.friction_step)
+        if bolder.status != "move":
+            return plan
+        return Plan(bolder.status, bolder.motion, bolder.reason, bolder.path, explores=True)
+
+    def _take(self, step: Step) -> Step:
+        self.motions += 1
+        return step
+
+    def end(self, now: float, status: str, reason: str = "") -> GoalResult:
+        """The goal's result, ending now with ``status``."""
+        return GoalResult(self.index, self.goal, self.start_time, now, status, reason, self.motions)
+
+
+def _usable(estimate: Estimate) -> bool:
+    values = (estimate.theta_o, estimate.s_h, estimate.s_g, estimate.d)
+    return bool(estimate.kinematics_valid) and all(map(math.isfinite, values))
+
+
+def _statics_of(estimate: Estimate, mu_h: float | None):
+    """The estimated statics per motion (at the current hand angle's gravity moment where no model
+    is estimated yet), with the hand friction ``mu_h`` if given."""
+    cache: dict[Motion, ObjectStatics] = {}
+    angle = float(estimate.theta_o)
+
+    def statics_of(motion: Motion) -> ObjectStatics:
+        if motion not in cache:
+            known = estimated_statics(estimate, angle, mu_h, motion)
+            if known is None:
+                raise ValueError("the estimate cannot judge the statics")
+            cache[motion] = known
+        return cache[motion]
+
+    return statics_of
+
+
+def s_g_from(estimate: Estimate) -> float | None:
+    """The ground contact ``s_g`` of a usable estimate (m), else None."""
+    return float(estimate.s_g) if _usable(estimate) and np.isfinite(estimate.s_g) else None

@@ -1,0 +1,219 @@
+"""ccopt.planning.planner (goals into motions) against independent truths.
+
+* Every motion a plan takes keeps the margin: direct :func:`ccopt.statics.best_wrench` calls at the
+  points it passes, computed here from the motion's definition.
+* Reachability and plan length: breadth-first search over the reference graph of
+  ``tests/test_planning.py`` (its edges from direct LP calls), built with the band and reach the
+  planner's docstring states.
+* Closed forms: without hand friction no hand slide is possible (the hand's tangential force must
+  be zero while it slides), so no ``s_h`` goal other than the current one is reachable.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from ccopt import statics
+from ccopt.closed_loop import LoopParams, start_config
+from ccopt.modes import Motion, motion_of
+from ccopt.objects import make_object
+from ccopt.planning.graph import GraphParams
+from ccopt.planning.planner import PlannerParams, next_motion, oracle_plan
+from ccopt.planning.tour import vertex_range
+from ccopt.plant.mujoco_planar import HAND_ANGLE_RANGE
+from ccopt.schedule import Goal, Step, reach
+from tests.test_planning import Reference, bfs_distances
+
+FORCES = (2.0, 22.5)
+"""N: the hand's force range less the controller's headroom, as the run's planner gets it."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Case:
+    truth: statics.TrueConfiguration
+    reach: tuple[float, float]
+    lever: float
+
+
+def case(name: str, added_mass: float = 0.0) -> Case:
+    obj = make_object(name, added_mass=added_mass)
+    params = LoopParams()
+    start = start_config(obj, params)
+    truth = statics.true_statics(obj, start, params.hand)
+    low, high = vertex_range(obj, start)
+    window = (max(HAND_ANGLE_RANGE[0], low), min(HAND_ANGLE_RANGE[1], high))
+    lever = params.estimator_params.friction.torque_margin * params.hand.half_length
+    return Case(truth, window, lever)
+
+
+@pytest.fixture(scope="module")
+def cases() -> dict[str, Case]:
+    return {
+        "triangle": case("paper-triangle"),
+        "square": case("paper-square"),
+        "heavy-triangle": case("paper-triangle", 0.5),
+    }
+
+
+def start_of(c: Case) -> tuple[float, float, float]:
+    return c.truth.theta_o, c.truth.s_h, 0.0
+
+
+def passed_points(step: Step, where: np.ndarray, s_h_step: float) -> list[tuple[float, float]]:
+    """The ``(θ_o, s_h)`` points a motion passes: a pivot its ends, a hand slide every ``s_h_step``
+    and its end, a ground slide its configuration."""
+    theta, s_h = where[0], where[1]
+    if step.kind == "pivot":
+        return [(theta, s_h), (theta + step.delta, s_h)]
+    if step.kind == "slide_hand":
+        count = max(1, math.ceil(abs(step.delta) / s_h_step - 1e-9))
+        return [(theta, s_h + step.delta * k / count) for k in range(count + 1)]
+    return [(theta, s_h)]
+
+
+def assert_plan_keeps_margin(c: Case, motions: tuple[Step, ...], params: PlannerParams) -> np.ndarray:
+    """Replay ``motions`` nominally from the start, checking every point with a direct LP; the end."""
+    where = np.array(start_of(c))
+    for step in motions:
+        motion = motion_of(step.kind, step.delta)
+        for theta, s_h in passed_points(step, where, params.s_h_step):
+            assert c.reach[0] - 1e-9 <= theta <= c.reach[1] + 1e-9, (step, theta)
+            margin = statics.best_wrench(c.truth.statics, theta, s_h, motion, c.lever, FORCES).margin
+            assert margin >= params.margin - 1e-6, (step, math.degrees(theta), s_h, margin)
+        where[step.coordinate] += step.delta
+    return where
+
+
+GOALS = {
+    "tilt up": reach(theta_deg=31.6),
+    "tilt down": reach(theta_deg=2.8),
+    "off grid": reach(theta_deg=20.0),
+    "ground +": reach(s_g_mm=10.0),
+    "ground −": reach(s_g_mm=-10.0),
+    "combined": reach(theta_deg=24.4, s_g_mm=10.0),
+}
+
+
+@pytest.mark.parametrize("name", ["triangle", "square", "heavy-triangle"])
+@pytest.mark.parametrize("goal", list(GOALS))
+def test_every_planned_motion_keeps_the_margin_and_a_reached_plan_ends_within_the_aim(
+    cases: dict[str, Case], name: str, goal: str
+) -> None:
+    c, target = cases[name], GOALS[goal]
+    params = PlannerParams()
+    answer = oracle_plan(c.truth.statics, start_of(c), target, 0.0, c.reach, c.lever, FORCES, params,
+                         face=c.truth.s_h_range)
+    end = assert_plan_keeps_margin(c, answer.motions, params)
+    assert np.allclose(end, answer.where)
+    if answer.status == "reached":
+        assert np.all(np.abs(target.errors(end, 0.0)) <= params.aim * target.tolerances + 1e-12)
+    else:
+        assert answer.reason
+
+
+def test_the_triangle_reaches_the_papers_tilts_and_ground_slides(cases: dict[str, Case]) -> None:
+    """The paper's triangle pivots 7.2° each way and slides on the ground once tilted (paper Fig. 9)."""
+    c = cases["triangle"]
+    for goal in (GOALS["tilt up"], GOALS["tilt down"], GOALS["ground +"], GOALS["ground −"]):
+        answer = oracle_plan(c.truth.statics, start_of(c), goal, 0.0, c.reach, c.lever, FORCES,
+                             face=c.truth.s_h_range)
+        assert answer.status == "reached", (goal, answer.reason)
+    up = oracle_plan(c.truth.statics, start_of(c), GOALS["tilt up"], 0.0, c.reach, c.lever, FORCES)
+    assert [step.kind for step in up.motions] == ["pivot", "pivot"]
+
+
+def reference_for(c: Case, goal_s_h: float | None, params: PlannerParams) -> Reference:
+    """The graph the planner's docstring describes: ``θ_o`` within the reach, ``s_h`` within the band
+    from the current to the goal's ``s_h`` widened by ``s_h_span``, cut to the face."""
+    s_h = c.truth.s_h
+    target = s_h if goal_s_h is None else goal_s_h
+    band = (min(s_h, target) - params.s_h_span, max(s_h, target) + params.s_h_span)
+    face = c.truth.s_h_range
+    band = (max(band[0], min(face[0], s_h)), min(band[1], max(face[1], s_h)))
+    grid = GraphParams(theta_range=c.reach, s_h_range=band, min_margin=params.margin,
+                       s_h_step=params.s_h_step, hand_slide=params.hand_slide)
+    return Reference(c.truth.statics, (c.truth.theta_o, s_h), c.lever, FORCES, grid)
+
+
+@pytest.mark.parametrize("name", ["triangle", "square", "heavy-triangle"])
+@pytest.mark.parametrize("pivots", [-3, -2, -1, 1, 2, 3])
+def test_a_tilt_on_the_grid_is_reachable_exactly_where_breadth_first_search_reaches_it(
+    cases: dict[str, Case], name: str, pivots: int
+) -> None:
+    c = cases[name]
+    params = PlannerParams()
+    goal = Goal(theta_o=c.truth.theta_o + pivots * params.pivot_step)
+    reference = reference_for(c, None, params)
+    distances = bfs_distances(reference, (0, 0))
+    hits = [n for (i, j), n in distances.items() if i == pivots]
+    plan = next_motion(lambda motion: c.truth.statics, start_of(c), goal, 0.0, c.reach, c.lever, FORCES,
+                       params, face=c.truth.s_h_range)
+    if not hits:
+        assert plan.status == "unreachable" and "θ_o" in plan.reason
+        return
+    assert plan.status == "move"
+    assert len(plan.path) >= min(hits)
+    assert len(plan.path) <= min(hits) * 1.2 + 1e-9  # a hand slide costs 1.2 pivots
+
+
+@pytest.mark.parametrize("sign", [1, -1])
+def test_without_hand_friction_no_hand_slide_goal_is_reachable(cases: dict[str, Case], sign: int) -> None:
+    c = cases["triangle"]
+    frictionless = dataclasses.replace(c.truth.statics, mu_h=0.0)
+    goal = Goal(s_h=c.truth.s_h + sign * 0.010)
+    plan = next_motion(lambda motion: frictionless, start_of(c), goal, 0.0, c.reach, c.lever, FORCES)
+    assert plan.status == "unreachable"
+    way = "+" if sign > 0 else "−"
+    assert f"no hand slide towards {way}s_h" in plan.reason and "μ_h 0.00" in plan.reason
+    for theta in np.linspace(*c.reach, 7):
+        motion = Motion.SLIDE_HAND_POS if sign > 0 else Motion.SLIDE_HAND_NEG
+        margin = statics.best_wrench(frictionless, theta, c.truth.s_h, motion, c.lever, FORCES).margin
+        assert not margin >= 1.0
+
+
+def test_a_goal_already_within_the_aim_is_reached_at_once(cases: dict[str, Case]) -> None:
+    c = cases["triangle"]
+    where = start_of(c)
+    goal = Goal(theta_o=where[0] + math.radians(0.4), s_g=0.0005)
+    plan = next_motion(lambda motion: c.truth.statics, where, goal, 0.0, c.reach, c.lever, FORCES)
+    assert plan.status == "reached" and plan.motion is None
+
+
+def slide_tilt(c: Case, goal: Goal, failed: dict[int, float]) -> float | None:
+    """The tilt (rad) at which the planner, its motions applied nominally, slides on the ground."""
+    where = np.array(start_of(c))
+    for _ in range(20):
+        plan = next_motion(lambda motion: c.truth.statics, tuple(where), goal, 0.0, c.reach, c.lever,
+                           FORCES, failed_slides=failed)
+        if plan.status != "move":
+            return None
+        if plan.motion.kind == "slide_ground":
+            return float(where[0])
+        where[plan.motion.coordinate] += plan.motion.delta
+    raise AssertionError("no ground slide within 20 motions")
+
+
+def test_a_ground_slide_that_did_not_start_is_sought_further_tilted(cases: dict[str, Case]) -> None:
+    """Tilting the hand's normal towards the slide is what lets the hand push the object along."""
+    c = cases["triangle"]
+    first = slide_tilt(c, GOALS["ground +"], {})
+    assert first is not None
+    again = slide_tilt(c, GOALS["ground +"], {1: first})
+    assert again is None or again > first + 1e-9
+    assert slide_tilt(c, GOALS["ground +"], {-1: first}) == pytest.approx(first)
+
+
+def test_a_ground_goal_out_of_reach_says_which_slide_and_where(cases: dict[str, Case]) -> None:
+    c = cases["square"]
+    narrow = (c.truth.theta_o - 0.01, c.truth.theta_o + 0.01)  # no tilt that lets the square slide
+    plan = next_motion(lambda motion: c.truth.statics, start_of(c), GOALS["ground +"], 0.0, narrow,
+                       c.lever, FORCES)
+    assert plan.status == "unreachable"
+    assert plan.reason.startswith("s_g +10 mm: no ground slide towards +s_g is possible at any tilt in")
+    margin = statics.best_wrench(c.truth.statics, c.truth.theta_o, c.truth.s_h, Motion.SLIDE_GROUND_POS,
+                                 c.lever, FORCES).margin
+    assert not margin >= 1.0
