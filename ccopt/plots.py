@@ -352,9 +352,9 @@ def friction_cones(run: Run, at: float | None = None) -> Figure:
     if index is None:
         when = "no estimate"
     else:
-        last = " (the run's last estimate)" if at is None else ""
-        when = f"estimated (black) at t = {record.data['time'][index]:.2f} s{last}"
-    _title(fig, f"Fig. 7: friction cones, {when} vs true (orange, dashed)", record)
+        last = " (the run's last)" if at is None else ""
+        when = f"estimate at t = {record.data['time'][index]:.2f} s{last}"
+    _title(fig, f"Fig. 7: friction cones, estimated (black) vs true (orange, dashed)\n{when}", record)
     return fig
 
 
