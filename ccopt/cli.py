@@ -45,6 +45,7 @@ from ccopt.cliutil import (
     stop_signals,
 )
 from ccopt.plant.base import MIN_RATE
+from ccopt.schedule import BUILTIN
 
 if TYPE_CHECKING:
     from ccopt.plant.sensors import Fault
@@ -212,7 +213,8 @@ def _run_parser(commands: argparse._SubParsersAction) -> None:
     )
     shape.add_argument("--vertices", help="convex polygon 'x,y;x,y;...' in mm, counter-clockwise")
     run.add_argument("--plant", choices=("planar", "panda"), help="simulated robot (default: planar)")
-    run.add_argument("--schedule", help="built-in name (paper, smoke) or a .yaml/.json file (default: paper)")
+    builtin = ", ".join(BUILTIN)
+    run.add_argument("--schedule", help=f"built-in name ({builtin}) or a .yaml/.json file (default: paper)")
     run.add_argument("--seed", type=seed_value, help="seed of the sensor noise, in [0, 2**64) (default: 0)")
     for flag in RUN_FLAGS:
         run.add_argument(flag.name, type=flag.type, metavar=flag.metavar, help=flag.help)
