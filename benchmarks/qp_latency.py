@@ -27,11 +27,18 @@ from ccopt.control.instances import random_instances
 TOLERANCE = 1e-5
 
 
-def cvxopt_solver(max_iterations: int = 10) -> Callable[[qp.QPInstance], qp.QPSolution]:
-    """cvxopt's interior-point ``solvers.qp`` on the soft QP in ``z = (Δx, t)``."""
+def cvxopt_solver(
+    max_iterations: int = 10, tolerance: float | None = None, strict: bool = True
+) -> Callable[[qp.QPInstance], qp.QPSolution]:
+    """cvxopt's interior-point ``solvers.qp`` on the soft QP in ``z = (Δx, t)``, at most
+    ``max_iterations`` iterations; ``tolerance`` sets its ``abstol``, ``reltol`` and ``feastol``
+    (None: cvxopt's defaults). ``strict``: a status other than optimal gives no step (NaN), else the
+    answer is taken as it is, as the paper authors' controller takes it."""
     import cvxopt
 
-    cvxopt.solvers.options.update({"maxiters": max_iterations, "show_progress": False})
+    options: dict[str, object] = {"maxiters": max_iterations, "show_progress": False}
+    if tolerance is not None:
+        options.update(abstol=tolerance, reltol=tolerance, feastol=tolerance)
     matrices = BufferedFunction(qp.build_qp_matrices())
     bound = np.zeros((1, 4))
     bound[0, 3] = -1.0
@@ -43,9 +50,10 @@ def cvxopt_solver(max_iterations: int = 10) -> Callable[[qp.QPInstance], qp.QPSo
             cvxopt.matrix(gradient),
             cvxopt.matrix(np.vstack([rows, bound])),
             cvxopt.matrix(np.append(upper, 0.0)),
+            options=options,
         )
         z = np.array(result["x"]).ravel()
-        if result["status"] != "optimal":
+        if strict and result["status"] != "optimal":
             z = np.full(4, np.nan)
         slack = float(z[3]) if np.isfinite(z[3]) else np.inf
         return qp.QPSolution(z[:3], instance.stiffness @ z[:3], slack, slack <= qp.INFEASIBLE_SLACK, "cvxopt")

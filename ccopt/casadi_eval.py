@@ -19,24 +19,34 @@ from numpy.typing import ArrayLike
 
 
 @dataclass(frozen=True)
-class _Binding:
-    """One thread's buffers: column-major arrays bound to a ``FunctionBuffer``, and its evaluator."""
+class Binding:
+    """One thread's buffers: column-major arrays bound to a ``FunctionBuffer``, and its evaluator.
+
+    ``flat_inputs`` and ``flat_outputs`` are 1-D views of the same memory (CasADi's order);
+    ``shaped_outputs`` are views shaped as :meth:`BufferedFunction.__call__` returns them (column
+    vectors 1-D, matrices 2-D)."""
 
     inputs: list[np.ndarray]
     outputs: list[np.ndarray]
+    flat_inputs: list[np.ndarray]
+    flat_outputs: list[np.ndarray]
+    shaped_outputs: list[np.ndarray]
     buffer: object  # keeps the FunctionBuffer alive while ``evaluate`` points into it
     evaluate: Callable[[], None]
 
 
-def _bind(function: ca.Function) -> _Binding:
+def _bind(function: ca.Function) -> Binding:
     inputs = [np.zeros(function.size_in(i), order="F") for i in range(function.n_in())]
     outputs = [np.zeros(function.size_out(i), order="F") for i in range(function.n_out())]
+    flat_inputs = [array.reshape(-1, order="F") for array in inputs]
+    flat_outputs = [array.reshape(-1, order="F") for array in outputs]
     buffer, evaluate = function.buffer()
-    for i, array in enumerate(inputs):
-        buffer.set_arg(i, memoryview(array.reshape(-1, order="F")))
-    for i, array in enumerate(outputs):
-        buffer.set_res(i, memoryview(array.reshape(-1, order="F")))
-    return _Binding(inputs, outputs, buffer, evaluate)
+    for i, flat in enumerate(flat_inputs):
+        buffer.set_arg(i, memoryview(flat))
+    for i, flat in enumerate(flat_outputs):
+        buffer.set_res(i, memoryview(flat))
+    shaped = [_squeeze(array) for array in outputs]
+    return Binding(inputs, outputs, flat_inputs, flat_outputs, shaped, buffer, evaluate)
 
 
 class BufferedFunction:
@@ -55,8 +65,9 @@ class BufferedFunction:
     def name(self) -> str:
         return self.function.name()
 
-    def _binding(self) -> _Binding:
-        """This thread's buffers, bound on the thread's first call."""
+    def buffers(self) -> Binding:
+        """This thread's buffers, bound on the thread's first call. Callers may fill them in place:
+        write ``flat_inputs``, call ``evaluate()``, read ``flat_outputs`` (views: copy what is kept)."""
         try:
             return self._local.binding
         except AttributeError:
@@ -66,21 +77,33 @@ class BufferedFunction:
     def __call__(self, *args: ArrayLike) -> tuple[np.ndarray, ...]:
         if len(args) != self._n_in:
             raise TypeError(f"{self.name} takes {self._n_in} arguments, got {len(args)}")
-        binding = self._binding()
-        for buffer, value in zip(binding.inputs, args, strict=True):
-            buffer[...] = np.reshape(value, buffer.shape, order="F")
+        binding = self.buffers()
+        for buffer, flat, value in zip(binding.inputs, binding.flat_inputs, args, strict=True):
+            if type(value) is float and flat.shape[0] == 1:  # a Python float: no array to build
+                flat[0] = value
+            else:
+                buffer[...] = np.reshape(value, buffer.shape, order="F")
         binding.evaluate()
-        return tuple(_squeeze(out.copy(order="C")) for out in binding.outputs)
+        return tuple(out.copy(order="C") for out in binding.shaped_outputs)
+
+    def call_scalars(self, *values: float) -> np.ndarray:
+        """Fast path for functions of scalar inputs: output 0 (a fresh array, shaped as
+        :meth:`__call__` returns it) of one number per input (not checked)."""
+        binding = self.buffers()
+        for flat, value in zip(binding.flat_inputs, values, strict=True):
+            flat[0] = value
+        binding.evaluate()
+        return binding.shaped_outputs[0].copy()
 
     def call_flat(self, flat_input: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """Fast path for one-input, one-output functions: copy ``flat_input`` in, return output 0.
 
         ``out``, when given, receives the result without allocation.
         """
-        binding = self._binding()
-        binding.inputs[0].reshape(-1, order="F")[:] = flat_input
+        binding = self.buffers()
+        binding.flat_inputs[0][:] = flat_input
         binding.evaluate()
-        result = binding.outputs[0].reshape(-1, order="F")
+        result = binding.flat_outputs[0]
         if out is None:
             return result.copy()
         out[:] = result
@@ -99,7 +122,7 @@ def _densified(function: ca.Function) -> ca.Function:
 
 
 def _squeeze(array: np.ndarray) -> np.ndarray:
-    """Column vectors as 1-D arrays, scalars as 0-D arrays, matrices unchanged."""
+    """Column vectors (a scalar too) as 1-D views, matrices unchanged."""
     rows, cols = array.shape
     if cols == 1:
         return array.reshape(rows)

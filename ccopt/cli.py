@@ -355,12 +355,14 @@ def draw_figures(loaded: record.Record, folder: Path, prog: str) -> bool:
     none is left cut short (a GIF is written frame by frame), and a failure is one line on stderr;
     figures it had not reached yet are left as they were. ``OSError`` if ``folder`` is not writable.
     """
-    from ccopt import plots
+    from ccopt import feasibility_map, plots
 
     before = _figure_files(folder)
     drawn = False
     try:
         paths = plots.write_figures(loaded, folder)
+        maps = feasibility_map.write_figure(folder)
+        paths += [maps] if maps is not None else []
         drawn = True
     except Exception as error:  # data a figure cannot show, a full disk: not to hide how the run ended
         reason = f"{type(error).__name__}: {error}".splitlines()[0]

@@ -38,7 +38,7 @@ from ccopt.planning.planner import PlannerParams
 from ccopt.planning.sequencer import GoalResult, GoalSequencer, s_g_from
 from ccopt.plant.base import MIN_RATE, Plant, PlantParams, StartConfig
 from ccopt.plant.placement import hand_over_vertex
-from ccopt.plant.sensors import SensorParams, Sensors
+from ccopt.plant.sensors import Measurement, SensorParams, Sensors
 from ccopt.record import RecordWriter
 from ccopt.schedule import Goal, Schedule, Step
 
@@ -65,12 +65,20 @@ class LoopParams:
     object) and the controller. ``start`` gives the object's tilt (resting on one vertex, as in the
     paper) and the push; with ``centre_hand`` the hand starts as close over the ground contact as its
     length allows (:func:`~ccopt.plant.placement.hand_over_vertex`), whatever ``start.s_h`` says.
-    ``panda`` holds the Panda plant's own settings (None: its defaults). Rates in Hz.
+    ``panda`` holds the Panda plant's own settings (None: its defaults). ``statics_hz`` is the
+    largest rate at which the estimated statics' target (:func:`ccopt.control.targets.statics_target`,
+    two or four LPs) is evaluated afresh, and at every step's start: at the paper's 30 Hz that is
+    every control tick, at 1 kHz every tenth (the configuration it judges changes little in 10 ms).
+    ``record_hz`` is the record's largest rate: it keeps every ``n``-th estimator sample with its
+    ground truth, ``n = round(estimator_hz / record_hz)`` (at least 1; at the default rates, every
+    one). Rates in Hz.
     """
 
     plant: PlantKind = "planar"
     estimator_hz: float = 100.0
     controller_hz: float = 30.0
+    statics_hz: float = 100.0
+    record_hz: float = 100.0
     hand: Hand = field(default_factory=Hand)
     start: StartConfig = field(default_factory=lambda: StartConfig(theta_o=0.3, normal_force=10.0))
     centre_hand: bool = True
@@ -96,7 +104,7 @@ class LoopParams:
         )
         validation.check_types((name, getattr(self, name), kind) for name, kind in parts)
         top = 1.0 / self.plant_params.timestep
-        for name in ("estimator_hz", "controller_hz"):
+        for name in ("estimator_hz", "controller_hz", "statics_hz", "record_hz"):
             rate = getattr(self, name)
             if not (np.isfinite(rate) and MIN_RATE <= rate <= top):
                 raise ValueError(f"{name} must be in [{MIN_RATE:g}, {top:g}] Hz, got {rate!r}")
@@ -111,10 +119,16 @@ class LoopParams:
         """The controller's actual period, s (a whole number of plant steps)."""
         return self.ticks(self.controller_hz) * self.plant_params.timestep
 
+    @property
+    def record_stride(self) -> int:
+        """The record keeps every ``record_stride``-th estimator sample (at least every one)."""
+        return max(1, round(self.estimator_hz / self.record_hz))
 
-STEP_STATUSES = ("reached", "timeout", "infeasible")
+
+STEP_STATUSES = ("reached", "timeout", "infeasible", "rolled")
 """How a step can end: its coordinate settled within tolerance (by the estimate), its time ran out,
-or the estimated statics ruled it out."""
+the estimated statics ruled it out, or (a goal's pivot) the hand rolled on the face instead: the
+object stopped pivoting (:data:`ROLL_TIME`)."""
 
 
 @dataclass(frozen=True)
@@ -158,6 +172,8 @@ class RunResult:
     goals: tuple[GoalResult, ...] = ()
     hand_angle_range: tuple[float, float] = (-math.pi, math.pi)
     """The hand angles the plant's robot reaches (rad)."""
+    last_usable: Estimate | None = None
+    """The run's last estimate whose kinematics were valid (None if none was)."""
 
     @property
     def interrupted(self) -> bool:
@@ -192,20 +208,23 @@ def control_input(
 ) -> ControlInput:
     """What the controller reads from an estimate, the measured hand pose, the progress source and the
     estimated statics' target (with the hand friction it explores, if any: :mod:`ccopt.control.targets`)."""
-    values = {name: getattr(estimate, name) for name in _FROM_ESTIMATE if name != "row_valid"}
+    values = {name: getattr(estimate, name) for name in _FROM_ESTIMATE}
     if target.mu_h is not None:
         values["cone_rows"] = contact.with_hand_friction(estimate.cone_rows, target.mu_h)
         values["mu_h"] = target.mu_h
-    return ControlInput(
-        **values,
-        row_valid=enforced_rows(estimate),
-        l_h=estimate.torque_lever,
-        hand_angle=float(hand_pose[2]),
-        kinematics_valid=kinematics_usable(estimate),
-        coordinates=coordinates,
-        force_target=target.force,
-        tangential_target=target.tangential,
-        statics_margin=target.margin if target.force is not None else None,
+    values["row_valid"] = enforced_rows(estimate)
+    return validation.trusted(  # every field, each well formed by construction
+        ControlInput,
+        {
+            **values,
+            "l_h": estimate.torque_lever,
+            "hand_angle": float(hand_pose[2]),
+            "kinematics_valid": kinematics_usable(estimate),
+            "coordinates": coordinates,
+            "force_target": target.force,
+            "tangential_target": target.tangential,
+            "statics_margin": target.margin if target.force is not None else None,
+        },
     )
 
 
@@ -274,6 +293,7 @@ class _StepTracker:
         self.start_time = 0.0
         self._nominal: np.ndarray | None = None
         self._within_since: float | None = None
+        self._rolled_since: float | None = None
         self.fresh = False
         """Whether the current step has not been controlled yet (the estimated statics judge it then)."""
 
@@ -328,6 +348,7 @@ class _StepTracker:
         self.command = Command(self.step.motion, targets, start=current, wrench=np.array(estimate.wrench))
         self.start_time = now
         self._within_since = None
+        self._rolled_since = None
         self.fresh = True
 
     def _next(self, now: float, estimate: Estimate, last: str | None) -> Step | None:
@@ -380,6 +401,21 @@ class _StepTracker:
             self.advance(now, estimate, hand_pose, "timeout")
         elif self.goal is not None and elapsed >= SLIDE_START_TIME and not self._started(coordinates):
             self.advance(now, estimate, hand_pose, "timeout", f"did not start within {SLIDE_START_TIME:g} s")
+        elif self.goal is not None and self._rolled(now, estimate):
+            self.advance(now, estimate, hand_pose, "rolled", "the hand rolled: the object stopped pivoting")
+
+    def _rolled(self, now: float, estimate: Estimate) -> bool:
+        """Whether a pivot has seen the hand turned past the object (the estimate's hand geometry,
+        the sign of ``θ_o − θ_h``, opposite to the pivot's) for :data:`ROLL_TIME`: the object no
+        longer turns with the hand (it lies on another vertex or a face), and pressing on would only
+        roll the hand further. (The other sign, the object ahead of the hand, is a hand tipping over
+        the face's end while the object still turns.)"""
+        if self.step.kind != "pivot" or estimate.hand_geometry != -math.copysign(1.0, self.step.delta):
+            self._rolled_since = None
+            return False
+        if self._rolled_since is None:
+            self._rolled_since = now
+        return now - self._rolled_since >= ROLL_TIME
 
     def _started(self, coordinates: np.ndarray | None) -> bool:
         """Whether a slide has moved its coordinate the commanded way by the slide onset (other
@@ -402,6 +438,10 @@ class _StepTracker:
         return (coordinates[k] - self.command.targets[k]) * math.copysign(1.0, step.delta) > step.tolerance
 
 
+ROLL_TIME = 0.15
+"""s: a goal's pivot whose hand the estimate sees off flush this long ends ``rolled`` (a flush
+pivot's hand is classified flush; the paper square pressed flat on its face rolled the hand within
+0.1 s of the tilt where it landed)."""
 SLIDE_START_TIME = 3.0
 """A goal's planned slide that has not started after this long (s) ends: where the estimated statics
 were too hopeful (a ground row never slid past is estimated inside the true one), the planner
@@ -513,7 +553,13 @@ class _Loop:
         self.velocity = np.zeros(3)
         self.pending = list(params.perturbations)
         self.last_solution: tuple[float, bool] = (0.0, True)
+        self.statics_period = params.ticks(params.statics_hz) * params.plant_params.timestep
+        self.last_aim: tuple[float, StaticsTarget] | None = None  # (time, target)
+        self.sensed = 0  # estimator samples so far
         self.estimate: Estimate | None = None
+        self.last_usable: Estimate | None = None
+        self.tilt_limits: dict[int, float] = {}
+        """The tilts past which the goals' pivots rolled the hand (:class:`GoalSequencer`)."""
         self.hand_pose: np.ndarray | None = None
         self.lost_since: float | None = None
         self.lost_pose: np.ndarray | None = None
@@ -522,7 +568,9 @@ class _Loop:
 
     def _sequencer(self, index: int, goal: Goal, now: float) -> GoalSequencer:
         planner = PlannerParams(slide_beyond=self.goal.push)
-        return GoalSequencer(index, goal, now, self.plant.hand_angle_range, self.goal, planner)
+        return GoalSequencer(
+            index, goal, now, self.plant.hand_angle_range, self.goal, planner, self.tilt_limits
+        )
 
     def run(self) -> RunResult:
         start = wallclock.perf_counter()
@@ -562,16 +610,24 @@ class _Loop:
         time, pose, wrench = reading.time, reading.hand_pose, reading.hand_wrench
         commanded = modes.configuration(self.tracker.command.motion) if self.tracker.command else None
         self.estimate = self.estimator.update(time, pose, wrench, commanded)
+        if self.estimate.kinematics_valid:
+            self.last_usable = self.estimate
         self.hand_pose = pose if bool(np.all(np.isfinite(pose))) else None
+        if self.sensed % self.params.record_stride == 0:
+            self._record(reading)
+        self.sensed += 1
+        health = self.health.update(time, pose, wrench, self.target)
+        if not health.ok:
+            self._stop("sensor_fault", health.message)
+
+    def _record(self, reading: Measurement) -> None:
+        """One record sample: this reading, the estimate, the command and the truth."""
         sample = _sample(self.plant, reading, self.estimate, self.target, self.tracker, *self.last_solution)
         if self.writer is not None:
             self.writer.append(sample)
         else:
             for key, value in sample.items():
                 self.samples.setdefault(key, []).append(np.asarray(value))
-        health = self.health.update(time, pose, wrench, self.target)
-        if not health.ok:
-            self._stop("sensor_fault", health.message)
 
     def _control(self) -> None:
         if self.hand_pose is None or self.estimate.skipped:  # a dropout: the target holds still
@@ -586,7 +642,7 @@ class _Loop:
         coordinates = tracker.coordinates(estimate, hand_pose)
         if coordinates is None:  # the estimate is unusable: hold where the command says
             coordinates = tracker.command.targets
-        aim = statics_target(estimate, float(hand_pose[2]), tracker.command.motion, self.goal)
+        aim = self._aim(estimate, hand_pose)
         if tracker.fresh and tracker.step.kind != "hold":
             reason = self._ruled_out(aim, estimate, hand_pose)
             if reason:
@@ -598,6 +654,15 @@ class _Loop:
         self.velocity = geometry.twist_hand_to_world(hand_pose[2], output.step) / self.controller.period
         if self.on_tick is not None:
             self.on_tick(self.plant.time, tracker.index, len(self.schedule.steps))
+
+    def _aim(self, estimate: Estimate, hand_pose: np.ndarray) -> StaticsTarget:
+        """The estimated statics' target of the command: evaluated afresh at a step's start and once
+        a statics period (:attr:`LoopParams.statics_hz`) has passed, else the last one."""
+        now, last = self.plant.time, self.last_aim
+        if self.tracker.fresh or last is None or now - last[0] >= self.statics_period - 1e-9:
+            motion = self.tracker.command.motion
+            self.last_aim = (now, statics_target(estimate, float(hand_pose[2]), motion, self.goal))
+        return self.last_aim[1]
 
     def _ruled_out(self, aim: StaticsTarget, estimate: Estimate, hand_pose: np.ndarray) -> str:
         """Why the step just begun is not to be forced ("" if it is): beyond the robot's reach, or
@@ -656,6 +721,7 @@ class _Loop:
             folder=self.folder,
             goals=tuple(tracker.goal_results),
             hand_angle_range=tuple(self.plant.hand_angle_range),
+            last_usable=self.last_usable,
         )
         if self.writer is not None:
             self.writer.meta["steps"] = [step.as_dict() for step in result.steps]

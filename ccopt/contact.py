@@ -247,5 +247,4 @@ def complementarity_margins(
 
 def admissible_motions(theta_o: float, s_h: float, d: float) -> np.ndarray:
     """Numeric :data:`motion_vectors`: columns ``v_θ, v_h, v_g`` in the hand frame."""
-    (vectors,) = _numeric["motion_vectors"](theta_o, s_h, d)
-    return vectors
+    return _numeric["motion_vectors"].call_scalars(theta_o, s_h, d)

@@ -24,12 +24,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ccopt import closed_loop, config, metrics, statics
+from ccopt import closed_loop, config, feasibility_map, metrics, statics
 from ccopt.closed_loop import LoopParams, RunResult
+from ccopt.feasibility_map import FeasibilityMap
 from ccopt.objects import PlanarObject
-from ccopt.planning.planner import oracle_plan
+from ccopt.planning.planner import PlannerParams, oracle_plan
 from ccopt.planning.sequencer import GoalResult
 from ccopt.planning.tour import vertex_range
+from ccopt.plant.base import StartConfig
 from ccopt.record import load_record, write_summary
 from ccopt.schedule import Schedule
 
@@ -44,6 +46,8 @@ class Experiment:
         summary: the run's ``summary.json`` content.
         feasibility: the oracle's check of every step (:class:`ccopt.statics.StepFeasibility`).
         folder: the run folder, None for an in-memory run.
+        feasibility_map: the run's feasibility maps (:mod:`ccopt.feasibility_map`), computed for a
+            run recorded to a folder (``feasibility_map.npz``), else None.
     """
 
     result: RunResult
@@ -51,6 +55,7 @@ class Experiment:
     summary: dict[str, object]
     feasibility: tuple[statics.StepFeasibility, ...]
     folder: Path | None
+    feasibility_map: FeasibilityMap | None = None
 
 
 RECORD_UNITS = {
@@ -101,30 +106,63 @@ def check_schedule(
     return statics.schedule_feasibility(obj, schedule.steps, start, params.hand)
 
 
-def goal_oracle(
-    obj: PlanarObject,
-    params: LoopParams,
-    data: dict[str, np.ndarray],
-    goal: GoalResult,
-    hand_angle_range: tuple[float, float],
-) -> dict[str, object]:
-    """The experimenter's answer for a goal: the planner on the *true* statics from the true
-    configuration when the goal began (:func:`ccopt.planning.planner.oracle_plan`), within the
-    robot's reach and the object's start vertex: ``reachable`` or not, why, and with how many
-    motions."""
+@dataclass(frozen=True)
+class OracleFrame:
+    """What the experimenter's oracle judges a run with: the true statics as the run starts the
+    object, the robot's reach narrowed to the object's start vertex, the planner's force range and
+    lever (rad, N, m)."""
+
+    start: StartConfig
+    truth: statics.TrueConfiguration
+    reach: tuple[float, float]
+    vertex_range: tuple[float, float]
+    forces: tuple[float, float]
+    lever: float
+
+
+def oracle_frame(obj: PlanarObject, params: LoopParams, hand_angle_range: tuple[float, float]) -> OracleFrame:
+    """The oracle's frame of a run of ``obj`` with ``params`` on a robot reaching ``hand_angle_range``."""
     start = closed_loop.start_config(obj, params)
     truth = statics.true_statics(obj, start, params.hand)
-    begin = np.asarray(data["true_coordinates"])[metrics.sample_at(data, goal.start_time)]
-    origin = float(np.asarray(data["true_coordinates"])[0, 2])
     low, high = vertex_range(obj, start)  # the object stays on its start vertex
     reach = (max(hand_angle_range[0], low), min(hand_angle_range[1], high))
     f_min, f_max = params.hand.force_limits
     forces = (f_min, f_max - params.controller_params.force_headroom)
     lever = params.estimator_params.friction.torque_margin * params.hand.half_length
+    return OracleFrame(start, truth, reach, (low, high), forces, lever)
+
+
+def goal_oracle(frame: OracleFrame, data: dict[str, np.ndarray], goal: GoalResult) -> dict[str, object]:
+    """The experimenter's answer for a goal: the planner on the *true* statics from the true
+    configuration when the goal began (:func:`ccopt.planning.planner.oracle_plan`), within the
+    robot's reach and the object's start vertex: ``reachable`` or not, why, and with how many
+    motions."""
+    begin = np.asarray(data["true_coordinates"])[metrics.sample_at(data, goal.start_time)]
+    origin = float(np.asarray(data["true_coordinates"])[0, 2])
+    truth = frame.truth
     answer = oracle_plan(
-        truth.statics, tuple(begin), goal.goal, origin, reach, lever, forces, face=truth.s_h_range
+        truth.statics, tuple(begin), goal.goal, origin, frame.reach, frame.lever, frame.forces,
+        face=truth.s_h_range,
     )
     return {"reachable": answer.status == "reached", "reason": answer.reason, "motions": len(answer.motions)}
+
+
+def run_feasibility_map(
+    obj: PlanarObject, params: LoopParams, result: RunResult, frame: OracleFrame
+) -> feasibility_map.FeasibilityMap:
+    """The run's feasibility maps (:mod:`ccopt.feasibility_map`): estimated at its last usable
+    estimate, true on ``obj``, over the robot's reach."""
+    return feasibility_map.of_run(
+        obj,
+        frame.start,
+        params.hand,
+        result.last_usable,
+        result.hand_angle_range,
+        frame.lever,
+        frame.forces,
+        PlannerParams().margin,
+        frame.vertex_range,
+    )
 
 
 def run_experiment(
@@ -165,12 +203,16 @@ def run_experiment(
         goals,
         len(schedule.goals),
     )
+    frame = oracle_frame(obj, params, result.hand_angle_range)
     for entry, goal in zip(summary["goals"], result.goals, strict=True):
-        entry["oracle"] = goal_oracle(obj, params, data, goal, result.hand_angle_range)
+        entry["oracle"] = goal_oracle(frame, data, goal)
     summary["message"] = result.message
     summary["units"] = SUMMARY_UNITS
     summary["impossible_steps"] = statics.impossible_steps(checks)
     summary["kinematics_resets"] = metrics.kinematics_resets(data["est_kinematics_valid"]) if data else 0
+    maps = None
     if folder is not None:
         write_summary(folder, summary)
-    return Experiment(result, meta, summary, checks, Path(folder) if folder is not None else None)
+        maps = run_feasibility_map(obj, params, result, frame)
+        maps.save(folder)
+    return Experiment(result, meta, summary, checks, Path(folder) if folder is not None else None, maps)

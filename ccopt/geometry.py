@@ -75,6 +75,24 @@ def hand_tangent(theta_h: float | ca.SX | ca.MX) -> Array | ca.SX | ca.MX:
     return np.array([np.cos(theta_h), np.sin(theta_h)])
 
 
+def hand_axes(theta_h: float) -> Axes:
+    """``(e_n, e_t)`` of :func:`hand_normal` and :func:`hand_tangent` as plain floats (the same values),
+    for code that runs every sample."""
+    s, c = math.sin(theta_h), math.cos(theta_h)
+    return (s, -c), (c, s)
+
+
+Axes = tuple[tuple[float, float], tuple[float, float]]
+"""``(e_n, e_t)`` as plain floats (:func:`hand_axes`)."""
+
+
+def hand_to_world(axes: Axes, n: float, t: float) -> tuple[float, float]:
+    """The world vector ``n e_n + t e_t`` of hand-frame components ``(n, t)``, with ``axes`` from
+    :func:`hand_axes` (plain floats; the values of :func:`hand_force_to_world`)."""
+    (nx, ny), (tx, ty) = axes
+    return n * nx + t * tx, n * ny + t * ty
+
+
 def hand_frame(theta_h: float | ca.SX | ca.MX) -> Array | ca.SX | ca.MX:
     """2×2 matrix whose columns are ``e_n`` and ``e_t``: maps hand-frame ``(n, t)`` to world ``(x, y)``."""
     if _is_symbolic(theta_h):
@@ -84,9 +102,8 @@ def hand_frame(theta_h: float | ca.SX | ca.MX) -> Array | ca.SX | ca.MX:
 
 def planar_hand_to_world(theta_h: float) -> Array:
     """3×3 map of hand-frame ``(n, t, θ)`` vectors (forces/torque or displacements) to world ``(x, y, θ)``."""
-    out = np.eye(3)
-    out[:2, :2] = hand_frame(theta_h)
-    return out
+    (nx, ny), (tx, ty) = hand_axes(theta_h)
+    return np.array(((nx, tx, 0.0), (ny, ty, 0.0), (0.0, 0.0, 1.0)))
 
 
 def wrench_hand_to_world(theta_h: float, wrench_hand: ArrayLike) -> Array:

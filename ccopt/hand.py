@@ -11,6 +11,7 @@ Units are SI. The impedance acts at the centre of the hand's contact face, in wo
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -75,6 +76,13 @@ class Hand:
             2.0 * self.damping_ratio * math.sqrt(k * m) for k, m in zip(self.stiffness, masses, strict=True)
         )
 
+    @functools.cached_property
+    def _diagonal_stiffness(self) -> np.ndarray:
+        """``diag(k_x, k_y, k_θ)``, read-only, made once (the controller reads it every tick)."""
+        stiffness = np.diag(self.stiffness)
+        stiffness.flags.writeable = False
+        return stiffness
+
     def stiffness_in_hand_frame(self, theta_h: float) -> np.ndarray:
         """``K`` (3×3) acting on hand-frame ``(Δn, Δt, Δθ)`` at hand angle ``θ_h`` (N/m, N·m/rad).
 
@@ -82,7 +90,7 @@ class Hand:
         """
         k_x, k_y, k_theta = self.stiffness
         if k_x == k_y:
-            return np.diag(self.stiffness)
+            return self._diagonal_stiffness
         frame = geometry.hand_frame(theta_h)
         out = np.zeros((3, 3))
         out[:2, :2] = frame.T @ np.diag([k_x, k_y]) @ frame

@@ -154,9 +154,7 @@ def admitted_coordinates(motion: Motion | str) -> tuple[int, ...]:
 def kept_contacts(motion: Motion | str) -> tuple[bool, bool, bool]:
     """Whether the hand must stick, the hand must stay flush and the ground must stick under a motion
     (or kind): every contact the motion's configuration does not set moving keeps its mode."""
-    kind = kind_of(motion)
-    representative = motion_of(kind, 1.0)
-    return tuple(value == 0 for value in astuple(_CONFIGURATIONS[representative]))
+    return _KEPT_CONTACTS[kind_of(motion)]
 
 
 def configuration(motion: Motion) -> ContactConfiguration:
@@ -165,10 +163,9 @@ def configuration(motion: Motion) -> ContactConfiguration:
 
 
 def kept_rows(motion: Motion) -> np.ndarray:
-    """Boolean mask over :class:`~ccopt.contact.Row`: the cone rows the QP keeps for ``motion``."""
-    mask = np.ones(N_CONE_ROWS, dtype=bool)
-    mask[list(REMOVED_ROWS[_as_motion(motion)])] = False
-    return mask
+    """Boolean mask over :class:`~ccopt.contact.Row`: the cone rows the QP keeps for ``motion``
+    (read-only)."""
+    return _KEPT_ROWS[_as_motion(motion)]
 
 
 def slide_hand(direction: float) -> Motion:
@@ -195,3 +192,18 @@ def _as_motion(motion: Motion | str) -> Motion:
     except ValueError:
         valid = ", ".join(m.value for m in Motion)
         raise ValueError(f"unknown motion {motion!r}; expected one of: {valid}") from None
+
+
+def _kept_rows_mask(motion: Motion) -> np.ndarray:
+    mask = np.ones(N_CONE_ROWS, dtype=bool)
+    mask[list(REMOVED_ROWS[motion])] = False
+    mask.flags.writeable = False
+    return mask
+
+
+_KEPT_ROWS = {motion: _kept_rows_mask(motion) for motion in Motion}
+""":func:`kept_rows` of every motion, made once."""
+_KEPT_CONTACTS = {
+    kind: tuple(value == 0 for value in astuple(_CONFIGURATIONS[motion_of(kind, 1.0)])) for kind in KINDS
+}
+""":func:`kept_contacts` of every kind, made once."""

@@ -38,7 +38,9 @@ import numpy as np
 CHUNKS = "chunks"
 RUN_ID_KEY = "__run_id__"
 """Key of the ``run_id`` in every chunk and in ``record.npz`` (not a data key)."""
-RUN_FILES = frozenset({"meta.json", "summary.json", "record.npz", "record.partial.npz", ".write_probe"})
+RUN_FILES = frozenset(
+    {"meta.json", "summary.json", "record.npz", "record.partial.npz", ".write_probe", "feasibility_map.npz"}
+)
 """Files of a run folder that ``prepare_folder(..., overwrite=True)`` may remove, besides
 :data:`RUN_SUFFIXES` and the chunks."""
 RUN_SUFFIXES = (".png", ".gif", ".partial")
@@ -240,14 +242,15 @@ class RecordWriter:
             self.flush()
 
     def flush(self) -> None:
-        """Write the buffered samples as the next chunk (atomically)."""
+        """Write the buffered samples as the next chunk (atomically). A signal (Ctrl-C, SIGTERM) while
+        it writes leaves the samples buffered and the chunk's number free: the next flush (the one
+        ``close`` makes) writes them again under the same name, over the partial file."""
         rows = self._rows
         if not rows:
             return
         arrays = {key: np.stack([row[key] for row in rows]) for key in self._keys}
-        self._chunks += 1
-        _save_npz(self.folder / CHUNKS / f"chunk_{self._chunks:05d}.npz", arrays, self.run_id)
-        self._rows = []
+        _save_npz(self.folder / CHUNKS / f"chunk_{self._chunks + 1:05d}.npz", arrays, self.run_id)
+        self._chunks, self._rows = self._chunks + 1, []
 
     def close(self, summary: dict[str, object] | None = None, status: str = "completed") -> Path:
         """Flush, consolidate the chunks into ``record.npz``, write ``summary.json`` and the status."""

@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import casadi as ca
@@ -231,25 +231,39 @@ def _row_bounds(motion: Motion) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return kept.astype(float), np.append(lower, [0.0, 0.0, 0.0]), np.append(upper, [0.0, np.inf, np.inf])
 
 
-_BOUNDS = {motion: _row_bounds(motion) for motion in Motion}
+@functools.cache
+def _rows_of(motion: Motion, known: tuple[bool, bool]) -> tuple[list[float], list[float], list[float]] | None:
+    """``(keep, lba, uba)`` of ``motion`` with the ground rows not ``known`` ignored (as lists, built
+    once per case); None where a row the motion removes is unknown (its margin cannot be judged)."""
+    unknown = [int(row) for row, is_known in zip(contact.GROUND_ROWS, known, strict=True) if not is_known]
+    if any(row in modes.REMOVED_ROWS[motion] for row in unknown):
+        return None
+    keep, lba, uba = (array.tolist() for array in _row_bounds(motion))
+    for row in unknown:
+        keep[row], lba[row], uba[row] = 0.0, -math.inf, math.inf
+    return keep, lba, uba
 
 
-def parameters(statics: ObjectStatics, theta_o: float, s_h: float, l_h: float) -> np.ndarray:
+def parameters(statics: ObjectStatics, theta_o: float, s_h: float, l_h: float) -> list[float]:
     """The LP's parameter vector ``p`` (see :func:`build_statics_lp`)."""
-    return np.concatenate(
-        [
-            [theta_o, s_h, statics.d, statics.gravity(theta_o), statics.mu_h, l_h],
-            statics.ground_rows.ravel(order="F"),
-            statics.ground_bounds,
-        ]
-    )
+    return [
+        theta_o,
+        s_h,
+        statics.d,
+        statics.gravity(theta_o),
+        statics.mu_h,
+        l_h,
+        *statics.ground_rows.ravel(order="F").tolist(),
+        *statics.ground_bounds.tolist(),
+    ]
 
 
-_MAXIMISE_MARGIN = np.array([0.0, 0.0, 0.0, -1.0, 0.0])
-_NEAREST_FORCE = np.array([0.0, 0.0, 0.0, -0.01, 1.0])
+_MAXIMISE_MARGIN = (0.0, 0.0, 0.0, -1.0, 0.0)
+_NEAREST_FORCE = (0.0, 0.0, 0.0, -0.01, 1.0)
 """Minimise ``|f_n − f_nom|``, ties broken towards a larger margin (a newton of force off the nominal costs
 100 times a newton of margin, so the force stays as near as it can and the rest of the wrench is
 centred in the cone)."""
+_UPPER_X = (_BIG,) * _N_UNKNOWNS
 
 
 def _solve(
@@ -258,50 +272,49 @@ def _solve(
     motion: Motion,
     l_h: float,
     force_limits: tuple[float, float],
-    objective: np.ndarray,
+    objective: tuple[float, ...],
     least_margin: float = -_BIG,
     nominal_force: float = 0.0,
     beyond: float = 0.0,
 ) -> StaticsResult:
-    keep, lba, uba = _BOUNDS[motion]
-    known = zip(contact.GROUND_ROWS, statics.ground_known, strict=True)
-    unknown = [int(row) for row, is_known in known if not is_known]
-    if any(row in modes.REMOVED_ROWS[motion] for row in unknown):
+    rows_of = _rows_of(motion, statics.ground_known)
+    if rows_of is None:
         return StaticsResult(math.nan, None)
-    keep, lba, uba = keep.copy(), lba.copy(), uba.copy()
-    keep[unknown] = 0.0
-    uba[unknown] = np.inf
-    lba[unknown] = -np.inf
-    removed = list(modes.REMOVED_ROWS[motion])
-    lba[removed] = uba[removed] = -beyond
-    lba[-2:] = (-nominal_force, nominal_force)
+    keep, lba, uba = rows_of
+    lba, uba = lba.copy(), uba.copy()
+    for row in modes.REMOVED_ROWS[motion]:
+        lba[row] = uba[row] = -beyond
+    lba[-2], lba[-1] = -nominal_force, nominal_force
     f_min, f_max = force_limits
-    lbx = np.array([f_min, -_BIG, -_BIG, least_margin, -_BIG])
-    ubx = np.array([f_max, _BIG, _BIG, _BIG, _BIG])
+    lbx = (f_min, -_BIG, -_BIG, least_margin, -_BIG)
+    ubx = (f_max, *_UPPER_X[1:])
     theta_o, s_h = configuration
-    p = parameters(statics, theta_o, s_h, l_h)
-    x, rows = _solver()(p, keep, objective, lba, uba, lbx, ubx)
-    x, rows = _honest_margin(np.array(x, dtype=float), np.array(rows, dtype=float), keep)
+    binding = _solver().buffers()  # filled in place: the LP is called twice a control tick
+    values = (parameters(statics, theta_o, s_h, l_h), keep, objective, lba, uba, lbx, ubx)
+    for flat, value in zip(binding.flat_inputs, values, strict=True):
+        flat[:] = value
+    binding.evaluate()
+    x, rows = _honest_margin(binding.flat_outputs[0].tolist(), binding.flat_outputs[1].tolist(), keep)
     if not _satisfied(x, rows, lba, uba, lbx, ubx):
         return StaticsResult(-math.inf, None)
-    return StaticsResult(float(x[3]), np.array(x[:3]))
+    return StaticsResult(x[3], np.array(x[:3]))
 
 
-def _honest_margin(x: np.ndarray, rows: np.ndarray, keep: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _honest_margin(x: list[float], rows: list[float], keep: list[float]) -> tuple[list[float], list[float]]:
     """The answer with its margin ``t`` lowered to the least kept row's slack where the solver
     overstated it. DAQP's proximal iterations can stop with a kept row short of ``t`` by a few
     hundredths of a newton (~0.3 % of random configurations): the wrench is sound, only its margin
     is not, and calling it infeasible would rule out a possible motion."""
-    kept = keep > 0.0
-    if not kept.any():
+    margin = x[3]
+    slack = [row + k * margin for row, k in zip(rows[:N_CONE_ROWS], keep, strict=True)]
+    kept = [value for value, k in zip(slack, keep, strict=True) if k > 0.0]
+    if not kept:
         return x, rows
-    slack = rows[:N_CONE_ROWS] + keep * x[3]
-    least = float(slack[kept].min())
-    if least >= x[3]:
+    least = min(kept)
+    if least >= margin:
         return x, rows
-    honest = x.copy()
-    honest[3] = least
-    return honest, np.concatenate([slack - keep * least, rows[N_CONE_ROWS:]])
+    honest = [*x[:3], least, *x[4:]]
+    return honest, [value - k * least for value, k in zip(slack, keep, strict=True)] + rows[N_CONE_ROWS:]
 
 
 def best_wrench(
@@ -355,16 +368,18 @@ def regulation_wrench(
     return StaticsResult(least, found.wrench) if found.wrench is not None else best
 
 
-def _satisfied(*arrays: np.ndarray) -> bool:
+def _satisfied(*values: Sequence[float]) -> bool:
     """Whether the LP's answer ``x`` and rows meet their bounds: else the LP was infeasible."""
-    x, rows, lba, uba, lbx, ubx = arrays
+    x, rows, lba, uba, lbx, ubx = values
+    return all(map(math.isfinite, x)) and _within(rows, lba, uba) and _within(x, lbx, ubx)
+
+
+def _within(values: Sequence[float], lower: Sequence[float], upper: Sequence[float]) -> bool:
+    """Whether every value lies within its bounds up to :data:`_FEASIBILITY_TOLERANCE` (False for NaN)."""
     tolerance = _FEASIBILITY_TOLERANCE
-    return bool(
-        np.all(np.isfinite(x))
-        and np.all(rows >= lba - tolerance)
-        and np.all(rows <= uba + tolerance)
-        and np.all(x >= lbx - tolerance)
-        and np.all(x <= ubx + tolerance)
+    return all(
+        low - tolerance <= value <= high + tolerance
+        for value, low, high in zip(values, lower, upper, strict=True)
     )
 
 

@@ -2,16 +2,21 @@
 
 Every check raises ``TypeError`` for a value of the wrong type and ``ValueError`` for one out of range,
 with the parameter's name and the value in the message. They run where parameters enter ccopt, never
-per tick in a hot loop.
+per tick in a hot loop; there, :func:`trusted` makes the objects whose values need no checks.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import math
 from collections.abc import Iterable
 from numbers import Real
+from typing import TypeVar
 
 import numpy as np
+
+T = TypeVar("T")
 
 
 def real(name: str, value: object) -> float:
@@ -69,3 +74,23 @@ def check_types(parts: Iterable[tuple[str, object, type]]) -> None:
     for name, value, kind in parts:
         if not isinstance(value, kind):
             raise TypeError(f"{name} must be a {kind.__name__}, got {type(value).__name__} {value!r}")
+
+
+def trusted(kind: type[T], fields: dict[str, object]) -> T:
+    """An instance of the dataclass ``kind`` holding ``fields`` (every field, by name) without calling
+    its ``__init__``: no defaults, no ``__post_init__``, no checks. For the few objects a hot path
+    makes every tick from values that are well formed by construction (a frozen dataclass's
+    ``__init__`` sets each field through ``object.__setattr__``: 8 µs for the estimator's 31 fields,
+    0.6 µs this way). The instance equals, compares, copies and pickles like one made by ``kind(...)``.
+    """
+    if fields.keys() != _field_names(kind):
+        expected = sorted(_field_names(kind))
+        raise TypeError(f"{kind.__name__} needs the fields {expected}, got {sorted(fields)}")
+    instance = object.__new__(kind)
+    instance.__dict__.update(fields)
+    return instance
+
+
+@functools.cache
+def _field_names(kind: type) -> frozenset[str]:
+    return frozenset(field.name for field in dataclasses.fields(kind))

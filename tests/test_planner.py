@@ -217,3 +217,23 @@ def test_a_ground_goal_out_of_reach_says_which_slide_and_where(cases: dict[str, 
     margin = statics.best_wrench(c.truth.statics, c.truth.theta_o, c.truth.s_h, Motion.SLIDE_GROUND_POS,
                                  c.lever, FORCES).margin
     assert not margin >= 1.0
+
+
+def test_a_reach_closed_down_to_the_current_tilt_plans_without_pivots(cases: dict[str, Case]) -> None:
+    """Tilt limits met on both sides (a one-point reach): a tilt goal is unreachable, a ground goal
+    is judged at the current tilt alone, and nothing raises."""
+    c = cases["triangle"]
+    where = start_of(c)
+    point = (where[0], where[0])
+    def known(motion: Motion) -> statics.ObjectStatics:
+        return c.truth.statics
+
+    tilt = next_motion(known, where, GOALS["tilt up"], 0.0, point, c.lever, FORCES)
+    assert tilt.status == "unreachable" and "θ_o 31.6°" in tilt.reason
+    ground = next_motion(known, where, GOALS["ground +"], 0.0, point, c.lever, FORCES)
+    margin = statics.best_wrench(
+        c.truth.statics, where[0], where[1], Motion.SLIDE_GROUND_POS, c.lever, FORCES
+    ).margin
+    assert (ground.status == "move") == (margin >= 1.0)
+    if ground.status == "move":
+        assert ground.motion.kind == "slide_ground"

@@ -402,7 +402,6 @@ def test_graph_params_default_increments_are_the_papers() -> None:
         ({"hand_slide": 0.0}, "hand_slide must be a multiple of s_h_step"),
         ({"hand_slide": -0.01}, "hand_slide must be a multiple of s_h_step"),
         ({"theta_range": (1.0, 0.0)}, "empty ranges"),
-        ({"theta_range": (0.2, 0.2)}, "empty ranges"),
         ({"theta_range": (math.nan, 1.0)}, "empty ranges"),
         ({"s_h_range": (0.01, -0.01)}, "empty ranges"),
         ({"s_h_range": (math.nan, 0.0)}, "empty ranges"),
@@ -416,9 +415,10 @@ def test_graph_params_reject_bad_steps_and_ranges(options: dict[str, object], me
 
 
 def test_graph_params_accept_a_single_s_h_and_equal_steps() -> None:
-    """A one-point ``s_h`` range (the hand cannot slide) and a hand slide of one grid step are valid."""
-    params = GraphParams(s_h_range=(0.0, 0.0), s_h_step=0.01, hand_slide=0.01)
-    assert params.s_h_range == (0.0, 0.0)
+    """A one-point ``s_h`` range (the hand cannot slide), a one-point ``θ_o`` range (the object may
+    not pivot: its tilt limits met) and a hand slide of one grid step are valid."""
+    params = GraphParams(s_h_range=(0.0, 0.0), s_h_step=0.01, hand_slide=0.01, theta_range=(0.2, 0.2))
+    assert params.s_h_range == (0.0, 0.0) and params.theta_range == (0.2, 0.2)
 
 
 @pytest.mark.parametrize(

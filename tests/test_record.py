@@ -33,6 +33,37 @@ def test_an_interrupted_run_keeps_its_flushed_chunks(tmp_path):
     assert len(loaded["time"]) == 20
 
 
+@pytest.mark.parametrize("moment", ["before the rename", "after the rename"])
+def test_a_signal_while_a_chunk_is_written_loses_and_repeats_no_sample(tmp_path, monkeypatch, moment):
+    """Ctrl-C or SIGTERM inside a flush: the run still closes with every sample once and no partial file."""
+    save, replace = np.savez, record.os.replace
+    interrupted = []
+
+    def savez_once_cut_short(path, **arrays):
+        save(path, **arrays)
+        if moment == "before the rename" and not interrupted:
+            interrupted.append(path)
+            raise KeyboardInterrupt
+
+    def replace_once_cut_short(source, target):
+        replace(source, target)
+        if moment == "after the rename" and not interrupted:
+            interrupted.append(target)
+            raise KeyboardInterrupt
+
+    writer = record.RecordWriter(tmp_path / "run", {}, flush_every=10)
+    monkeypatch.setattr(record.np, "savez", savez_once_cut_short)
+    monkeypatch.setattr(record.os, "replace", replace_once_cut_short)
+    with pytest.raises(KeyboardInterrupt):
+        for k in range(25):
+            writer.append(sample(k))
+    writer.close(status="interrupted")
+    assert interrupted
+    loaded = record.load_record(tmp_path / "run")
+    np.testing.assert_array_equal(loaded["time"], np.arange(10) * 0.01)
+    assert not list((tmp_path / "run" / record.CHUNKS).iterdir())
+
+
 def test_unwritable_folder_is_a_clear_error(tmp_path):
     blocker = tmp_path / "file"
     blocker.write_text("")

@@ -104,9 +104,14 @@ def test_ctrl_c_while_drawing_leaves_no_figure_cut_short(tmp_path):
 
 
 def test_sigterm_stops_a_pooled_study_and_the_runs_under_way(tmp_path):
-    """The study stops at once: the workers' runs close their records as interrupted."""
+    """The study stops at once: the workers' runs close their records as interrupted. The runs hold
+    for two minutes, so that both are still under way when the signal comes (a paper-schedule run
+    takes about a second, less than two workers' start can differ by on a busy machine)."""
     out = tmp_path / "study"
-    study = ["paper", "--trials", "2", "--workers", "2", "--no-progress", "--out", str(out)]
+    schedule = tmp_path / "long.yaml"
+    schedule.write_text("name: long\nsteps:\n  - {motion: hold, duration_s: 120}\n")
+    study = ["paper", "--trials", "2", "--workers", "2", "--schedule", str(schedule), "--no-progress"]
+    study += ["--out", str(out)]
     process = subprocess.Popen(
         [sys.executable, "-m", "studies", *study],
         stdout=subprocess.PIPE,

@@ -138,25 +138,47 @@ def test_unreachable_scheduler_is_one_line_exit_2(tmp_path, capsys, monkeypatch)
     assert capsys.readouterr().err.count("\n") == 1
 
 
-def test_dask_cluster_gives_the_local_numbers(tmp_path):
+@pytest.fixture(scope="module")
+def dask_cluster():
+    """A Dask cluster on loopback: two worker processes, one thread each."""
     from distributed import LocalCluster
 
+    with LocalCluster(
+        n_workers=2, processes=True, threads_per_worker=1, host="127.0.0.1", dashboard_address=None
+    ) as cluster:
+        yield cluster
+
+
+def test_dask_cluster_gives_the_local_numbers(tmp_path, dask_cluster):
     from studies import feasibility
 
     grid = ["--mu-hand", "0.3,0.8", "--theta=-10,0,10", "--mu-ground", "0.4,0.8", "--mass", "0.3"]
     common = [*grid, "--no-progress"]
     assert feasibility.main([*common, "--out", str(tmp_path / "local"), "--workers", "1"]) == 0
-    with LocalCluster(
-        n_workers=2, processes=True, threads_per_worker=1, host="127.0.0.1", dashboard_address=None
-    ) as cluster:
-        assert (
-            feasibility.main(
-                [*common, "--out", str(tmp_path / "dask"), "--scheduler", cluster.scheduler_address]
-            )
-            == 0
-        )
+    scheduler = dask_cluster.scheduler_address
+    assert feasibility.main([*common, "--out", str(tmp_path / "dask"), "--scheduler", scheduler]) == 0
     local, dask = (
         json.loads((tmp_path / k / "results.json").read_text())["trials"] for k in ("local", "dask")
     )
     assert len(local) == 2
+    assert local == dask
+
+
+def test_a_closed_loop_study_runs_on_a_dask_cluster_as_it_runs_locally(tmp_path, dask_cluster):
+    """The robustness study's trials (closed-loop runs: plants, estimator, compiled QP) on the
+    cluster's workers give the numbers of the same trials run in this process (the wall time aside)."""
+    from studies import robustness
+
+    common = ["--trials", "2", "--schedule", "smoke", "--seed", "3", "--no-progress"]
+    assert robustness.main([*common, "--out", str(tmp_path / "local"), "--workers", "1"]) == 0
+    scheduler = dask_cluster.scheduler_address
+    assert robustness.main([*common, "--out", str(tmp_path / "dask"), "--scheduler", scheduler]) == 0
+    local, dask = (
+        [
+            {**trial, "result": {k: v for k, v in trial["result"].items() if k != "wall_time_s"}}
+            for trial in json.loads((tmp_path / k / "results.json").read_text())["trials"]
+        ]
+        for k in ("local", "dask")
+    )
+    assert len(local) == 2 and all(trial["result"]["fits_hand"] for trial in local)
     assert local == dask

@@ -47,11 +47,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from operator import truediv
 
 import numpy as np
 
 from ccopt import contact, modes, validation
-from ccopt.contact import N_CONE_ROWS, Row
+from ccopt.contact import N_CONE_ROWS
 from ccopt.control.qp import QPInstance, QPSolution, QPSolver, make_solver
 from ccopt.hand import Hand
 from ccopt.modes import Motion
@@ -229,13 +230,6 @@ class ControlOutput:
     instance: QPInstance
 
 
-def _row_units(lever: float) -> np.ndarray:
-    """Per-row factor turning a margin in N into the row's units (torque rows: × ``l_h``)."""
-    scale = np.ones(N_CONE_ROWS)
-    scale[[Row.HAND_PIVOT_POS, Row.HAND_PIVOT_NEG]] = lever
-    return scale
-
-
 class _Terms:
     """The tracking terms ``α (dᵀΔx − δ)²`` of one QP, collected in order."""
 
@@ -258,8 +252,21 @@ def quasi_static_maps(
     in equilibrium again, with ``E Δw = 0`` for the equilibrium rows ``E`` (k×3): ``A = (E K V)⁻¹ E K``,
     ``P = K (I − V A)`` (see the module docstring)."""
     coupling = balance @ stiffness
-    motion_map = np.linalg.solve(coupling @ free_directions, coupling)
-    return motion_map, stiffness @ (np.eye(3) - free_directions @ motion_map)
+    reduced = coupling @ free_directions
+    if reduced.shape == (1, 1):  # one free direction: LAPACK's 1×1 solve, bit for bit, without its overhead
+        motion_map = coupling * (1.0 / reduced.item())
+    else:
+        motion_map = np.linalg.solve(reduced, coupling)
+    return motion_map, stiffness @ (_IDENTITY - free_directions @ motion_map)
+
+
+_IDENTITY = np.eye(3)
+_IDENTITY.flags.writeable = False
+_FORCE_ROWS = np.array([[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]])
+"""The normal-force limits' rows ``f_n ≤ f_max``, ``−f_n ≤ −f_min`` after the cone rows."""
+_FORCE_ROWS.flags.writeable = False
+_FORCE_ACTIVE = np.ones(2, dtype=bool)
+_FORCE_ACTIVE.flags.writeable = False
 
 
 class Controller:
@@ -288,6 +295,9 @@ class Controller:
         self._convergence = 1.0 - math.exp(-self.params.convergence_rate * self.period)
         self._force_gain = 1.0 - math.exp(-self.params.force_rate * self.period)
         self._max_step = np.asarray(self.params.max_speed) * self.period
+        self._max_step_list = self._max_step.tolist()
+        f_min, f_max = self.hand.force_limits
+        self._force_bounds = np.array([f_max - self.params.force_headroom, -f_min])
         p = self.params
         self._units = np.array([p.length_unit, p.length_unit, p.angle_unit])
         self._row_gains = np.full(N_CONE_ROWS + 2, self.params.row_gains)
@@ -303,10 +313,10 @@ class Controller:
         instance = self.build_instance(state, command)
         solution = self.solver.solve(instance)
         step = self._units * solution.step  # the QP's variable is the step in task units
-        excess = np.max(np.abs(step) / self._max_step)
+        excess = max(map(truediv, map(abs, step.tolist()), self._max_step_list))
         step = step / excess if excess > 1.0 else step  # scaled, not clipped: the step keeps its
         # direction, and with it the balance of the wrench it predicts
-        return ControlOutput(step=step, solution=solution, instance=instance)
+        return validation.trusted(ControlOutput, {"step": step, "solution": solution, "instance": instance})
 
     def build_instance(self, state: ControlInput, command: Command) -> QPInstance:
         """The QP of this tick (exposed for studies and tests)."""
@@ -315,7 +325,8 @@ class Controller:
         s_h, d = (state.s_h, state.d) if state.kinematics_valid else (0.0, p.d_guess)
         vectors = contact.admissible_motions(state.hand_angle, s_h, d)
         free, balance = self._model(state, command, vectors)
-        motion_map, wrench_map = quasi_static_maps(stiffness, vectors[:, free], balance)
+        free_directions = vectors[:, :1] if len(free) == 1 else vectors[:, free]  # θ_o is column 0
+        motion_map, wrench_map = quasi_static_maps(stiffness, free_directions, balance)
         errors = np.asarray(command.targets) - np.asarray(state.coordinates)
         regulated = modes.driven_coordinate(command.motion)
         terms = _Terms()
@@ -323,7 +334,7 @@ class Controller:
             unit = p.angle_unit if k == modes.THETA_O else p.length_unit
             weight = p.weights[k] if k == regulated else p.hold_weights[k]
             terms.add(motion_map[row] / unit, weight, self._convergence * errors[k] / unit)
-        f_n = state.wrench[0]
+        f_n = float(state.wrench[0])
         force_target = p.normal_force if state.force_target is None else state.force_target
         change = self._force_gain * (force_target - f_n)
         terms.add(wrench_map[0] / p.force_unit, p.force_weight, change / p.force_unit)
@@ -340,12 +351,11 @@ class Controller:
             excess = state.cone_bounds[removed[0]] + p.push_force - float(row @ state.wrench)
             terms.add((row @ wrench_map) / scale, p.push_weight, self._force_gain * excess / scale)
         margins = self._margins(f_n, state)
-        f_min, f_max = self.hand.force_limits
-        rows = np.vstack([state.cone_rows, [[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]]])
-        bounds = np.concatenate([state.cone_bounds - margins, [f_max - p.force_headroom, -f_min]])
-        active = np.concatenate([modes.kept_rows(command.motion) & state.row_valid, [True, True]])
+        rows = np.concatenate((state.cone_rows, _FORCE_ROWS))
+        bounds = np.concatenate((state.cone_bounds - margins, self._force_bounds))
+        active = np.concatenate((modes.kept_rows(command.motion) & state.row_valid, _FORCE_ACTIVE))
         units = self._units  # the QP's variable y is the step in task units: Δx = units · y
-        return QPInstance(
+        return QPInstance.unchecked(  # well formed by construction: no per-tick checks
             stiffness=wrench_map * units,
             wrench=np.asarray(state.wrench, dtype=float),
             rows=rows,
@@ -367,32 +377,28 @@ class Controller:
         slide's coordinate joins once the slide has begun (moved by ``slide_onset`` the commanded way
         since the step began), held on its friction boundary by the removed row.
         """
-        free, balance = [modes.THETA_O], [vectors[:, modes.THETA_O]]
-        driven = modes.driven_coordinate(command.motion)
         removed = modes.REMOVED_ROWS[command.motion]
         if removed and command.start is not None:
+            driven = modes.driven_coordinate(command.motion)
             delta = command.targets[driven] - command.start[driven]
             progress = (state.coordinates[driven] - command.start[driven]) * math.copysign(1.0, delta)
             if progress >= self.params.slide_onset:
-                free.append(driven)
-                balance.append(state.cone_rows[removed[0]])
-        return free, np.asarray(balance)
+                balance = np.array((vectors[:, modes.THETA_O], state.cone_rows[removed[0]]))
+                return [modes.THETA_O, driven], balance
+        return [modes.THETA_O], vectors[:, modes.THETA_O : modes.THETA_O + 1].T
 
     def _margins(self, f_n: float, state: ControlInput) -> np.ndarray:
         """Per-row margins ``b − margin``: strict inequalities for the rows the command keeps."""
         p = self.params
         force = max(f_n, 0.0)
-        mu_h = state.mu_h
-        margins = np.full(N_CONE_ROWS, p.ground_margin)
-        margins[[Row.HAND_SLIDE_POS, Row.HAND_SLIDE_NEG]] = max(
-            p.friction_margin * mu_h * force, p.min_margin
-        )
-        margins[[Row.HAND_PIVOT_POS, Row.HAND_PIVOT_NEG]] = (
-            max(p.torque_margin * force, p.min_margin) * state.l_h
-        )
+        slide = max(p.friction_margin * state.mu_h * force, p.min_margin)
+        pivot = max(p.torque_margin * force, p.min_margin) * state.l_h
+        ground = p.ground_margin
         if state.statics_margin is not None and math.isfinite(state.statics_margin):
             # the statics' wrench keeps this margin on every row (N; torque rows over l_h): keep the
             # QP's rows no stricter, so that the QP can reach it, but never below half their own
-            share = p.statics_margin_share * state.statics_margin * _row_units(state.l_h)
-            margins = np.maximum(np.minimum(margins, share), 0.5 * margins)
-        return margins
+            share = p.statics_margin_share * state.statics_margin
+            slide = max(min(slide, share), 0.5 * slide)
+            pivot = max(min(pivot, share * state.l_h), 0.5 * pivot)
+            ground = max(min(ground, share), 0.5 * ground)
+        return np.array((slide, slide, pivot, pivot, ground, ground))  # Row order

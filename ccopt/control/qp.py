@@ -43,6 +43,7 @@ import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ccopt import validation
 from ccopt.casadi_eval import BufferedFunction
 
 MAX_ROWS = 10
@@ -89,6 +90,7 @@ for _name, _shape in _LAYOUT:
     _offset += _size
 N_PARAMETERS = _offset
 """Length of the packed parameter vector of the compiled solver."""
+_FIELDS = tuple(name for name, _ in _LAYOUT)
 
 
 @dataclass(frozen=True)
@@ -136,6 +138,30 @@ class QPInstance:
             raise ValueError(f"weights must be non-negative, got {self.weights!r}")
         object.__setattr__(self, "packed", _pack(self, n_rows, n_terms))
 
+    @classmethod
+    def unchecked(
+        cls,
+        stiffness: np.ndarray,
+        wrench: np.ndarray,
+        rows: np.ndarray,
+        bounds: np.ndarray,
+        gains: np.ndarray,
+        active: np.ndarray,
+        regularization: float,
+        directions: np.ndarray,
+        weights: np.ndarray,
+        targets: np.ndarray,
+    ) -> QPInstance:
+        """The instance of these fields (NumPy arrays of the shapes above) without the constructor's
+        checks: for a producer whose instances are well formed by construction, the controller once a
+        tick (its inputs were checked where they entered). Anything else should use the constructor."""
+        instance = object.__new__(cls)
+        fields = (stiffness, wrench, rows, bounds, gains, active, regularization)
+        for name, value in zip(_FIELDS, (*fields, directions, weights, targets), strict=True):
+            object.__setattr__(instance, name, value)
+        object.__setattr__(instance, "packed", _pack(instance, len(rows), len(directions)))
+        return instance
+
 
 def _check_matrix(name: str, value: ArrayLike, max_rows: int, cols: int) -> int:
     shape = np.shape(value)
@@ -154,30 +180,32 @@ def _check_vector(name: str, value: ArrayLike, length: int) -> None:
 
 
 def _pack(instance: QPInstance, n_rows: int, n_terms: int) -> np.ndarray:
+    """The packed parameter vector: each field in its slot of :data:`_LAYOUT`, column-major like
+    CasADi, a ``(count, ...)`` block in the first ``count`` rows of its ``(MAX, ...)`` slot (zeros
+    after)."""
     packed = np.zeros(N_PARAMETERS)
-
-    def put(name: str, value: ArrayLike, count: int | None = None) -> None:
-        view = packed[_SLICES[name]]
-        flat = np.asarray(value, dtype=float).reshape(-1, order="F")
-        if count is None:
-            view[:] = flat
-        else:  # a (count, ...) block into a (MAX, ...) slot, column-major like CasADi
-            shape = dict(_LAYOUT)[name]
-            block = np.zeros(shape)
-            block[:count] = np.asarray(value, dtype=float)
-            view[:] = block.reshape(-1, order="F")
-
-    put("stiffness", instance.stiffness)
-    put("wrench", instance.wrench)
-    put("rows", instance.rows, n_rows)
-    put("bounds", instance.bounds, n_rows)
-    put("gains", instance.gains, n_rows)
-    put("active", np.asarray(instance.active, dtype=float), n_rows)
-    put("regularization", instance.regularization)
-    put("directions", instance.directions, n_terms)
-    put("weights", instance.weights, n_terms)
-    put("targets", instance.targets, n_terms)
+    # a (rows, 3) slot column-major is a (3, rows) block row-major: the transposed field fills it
+    packed[_STIFFNESS].reshape(3, 3)[...] = np.asarray(instance.stiffness).T
+    packed[_WRENCH] = instance.wrench
+    packed[_REGULARIZATION] = instance.regularization
+    packed[_ROWS].reshape(3, MAX_ROWS)[:, :n_rows] = np.asarray(instance.rows).T
+    packed[_DIRECTIONS].reshape(3, MAX_TERMS)[:, :n_terms] = np.asarray(instance.directions).T
+    start = _SLICES["bounds"].start
+    packed[start : start + n_rows] = instance.bounds
+    start = _SLICES["gains"].start
+    packed[start : start + n_rows] = instance.gains
+    start = _SLICES["active"].start
+    packed[start : start + n_rows] = instance.active
+    start = _SLICES["weights"].start
+    packed[start : start + n_terms] = instance.weights
+    start = _SLICES["targets"].start
+    packed[start : start + n_terms] = instance.targets
     return packed
+
+
+_STIFFNESS, _WRENCH, _ROWS, _DIRECTIONS, _REGULARIZATION = (
+    _SLICES[name] for name in ("stiffness", "wrench", "rows", "directions", "regularization")
+)
 
 
 @dataclass(frozen=True)
@@ -278,12 +306,15 @@ def build_qp_function(plugin: str = "daqp") -> ca.Function:
 def _solution(z: np.ndarray, instance: QPInstance, backend: str) -> QPSolution:
     step = z[:3].copy()  # z may be a solver's reusable output buffer
     slack = max(float(z[3]), 0.0)
-    return QPSolution(
-        step=step,
-        wrench_change=np.asarray(instance.stiffness) @ step,
-        slack=slack,
-        feasible=slack <= INFEASIBLE_SLACK,
-        backend=backend,
+    return validation.trusted(  # every field, each well formed by construction
+        QPSolution,
+        {
+            "step": step,
+            "wrench_change": np.asarray(instance.stiffness) @ step,
+            "slack": slack,
+            "feasible": slack <= INFEASIBLE_SLACK,
+            "backend": backend,
+        },
     )
 
 

@@ -84,6 +84,7 @@ _CONTACT_ROWS = (
     (Row.GROUND_SLIDE_POS, Row.GROUND_SLIDE_NEG),
 )
 """The rows blocking the positive and negative motion of the hand slide, hand pivot, ground slide."""
+(_SP, _SN), (_PP, _PN), (_GP, _GN) = ((int(pos), int(neg)) for pos, neg in _CONTACT_ROWS)
 _CONFIGURATIONS = {
     (hand, pivot, ground): ContactConfiguration(ContactMode(hand), HandGeometry(pivot), ContactMode(ground))
     for hand in (-1, 0, 1)
@@ -112,9 +113,9 @@ class ModeClassifier:
             estimated: per row, whether the row is estimated (6 values).
         """
         m, e = margins, estimated
-        thresholds, latches = self._thresholds, self._latches
-        signs = tuple(
-            latch.update(time, tight_direction(m[pos], m[neg], threshold, e[pos] and e[neg]))
-            for (pos, neg), threshold, latch in zip(_CONTACT_ROWS, thresholds, latches, strict=True)
-        )
-        return _CONFIGURATIONS[signs]
+        (slide, pivot, ground), (hand_latch, pivot_latch, ground_latch) = self._thresholds, self._latches
+        return _CONFIGURATIONS[  # unrolled over the three contacts (rows in Row order): every sample
+            hand_latch.update(time, tight_direction(m[_SP], m[_SN], slide, e[_SP] and e[_SN])),
+            pivot_latch.update(time, tight_direction(m[_PP], m[_PN], pivot, e[_PP] and e[_PN])),
+            ground_latch.update(time, tight_direction(m[_GP], m[_GN], ground, e[_GP] and e[_GN])),
+        ]

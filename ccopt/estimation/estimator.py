@@ -30,6 +30,7 @@ hand_wrench)`` can be replayed with :func:`replay`.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
@@ -251,7 +252,7 @@ class Estimator:
         Raises ``TypeError`` or ``ValueError`` (and changes nothing) unless ``time`` is a real
         number and the pose and wrench are three numbers each, all within the float range.
         """
-        if not isinstance(time, Real):
+        if type(time) is not float and not isinstance(time, Real):
             raise TypeError(f"time must be a real number, got {type(time).__name__} {time!r}")
         try:
             time = float(time)
@@ -267,11 +268,12 @@ class Estimator:
         if not all(map(float.__ge__, SAMPLE_BOUNDS, map(abs, values))):  # also False for NaN
             return self._skip(time)
         theta_h, f_n, f_t = values[3], values[4], values[5]
-        e_n, e_t = geometry.hand_normal(theta_h).tolist(), geometry.hand_tangent(theta_h).tolist()
+        axes = geometry.hand_axes(theta_h)
+        e_n, e_t = axes
         in_contact = f_n > self.params.contact_force
         if in_contact:
             self.friction.update(f_n, f_t)
-            self.ground.update(time, geometry.hand_force_to_world(theta_h, f_n, f_t))
+            self.ground.update(time, geometry.hand_to_world(axes, f_n, f_t))
         friction, ground = self.friction, self.ground.cone
         cone_rows, cone_bounds, margins = self._cone(theta_h, friction.mu_h, friction.l_h_eff, ground, wrench)
         valid = [friction.valid, friction.valid, True, True, ground.valid, ground.valid]  # order: Row
@@ -415,6 +417,7 @@ class SlideEvidence:
         return self.slid[0], self.slid[1]
 
 
+@functools.cache  # 27 × 10 configurations: each case is made once
 def commanded_modes(
     modes: ContactConfiguration, commanded: ContactConfiguration | None
 ) -> ContactConfiguration:
@@ -502,46 +505,42 @@ def _assemble(
     wrench.flags.writeable = False
     row_valid.flags.writeable = False
     cone_rows, cone_bounds, margins = cone
-    return Estimate(
-        time=float(time),
-        wrench=wrench,
-        cone_rows=cone_rows,
-        cone_bounds=cone_bounds,
-        margins=margins,
-        row_valid=row_valid,
-        mu_h=friction.mu_h,
-        torque_lever=friction.l_h_eff,
-        ground_rows=ground.A,
-        ground_bounds=ground.b,
-        mu_g=ground.mu_g if all(fitted) else math.nan,
-        ground_fitted=fitted,
-        **{name: getattr(modes, name) for name in _MODE_FIELDS},
-        in_contact=in_contact,
-        theta_o=theta_o,
-        **{name: getattr(kinematics, name) for name in _KINEMATIC_FIELDS},
-        skipped=skipped,
-        kinematics_mean=rough[0],
-        kinematics_std=rough[1],
-        gravity=gravity,
-        hand_slid=hand_slid,
+    return validation.trusted(  # every field, each well formed by construction
+        Estimate,
+        {
+            "time": float(time),
+            "wrench": wrench,
+            "cone_rows": cone_rows,
+            "cone_bounds": cone_bounds,
+            "margins": margins,
+            "row_valid": row_valid,
+            "mu_h": friction.mu_h,
+            "torque_lever": friction.l_h_eff,
+            "ground_rows": ground.A,
+            "ground_bounds": ground.b,
+            "mu_g": ground.mu_g if all(fitted) else math.nan,
+            "ground_fitted": fitted,
+            "hand_mode": modes.hand_mode,
+            "hand_geometry": modes.hand_geometry,
+            "ground_mode": modes.ground_mode,
+            "in_contact": in_contact,
+            "theta_o": theta_o,
+            "s_h": kinematics.s_h,
+            "s_g": kinematics.s_g,
+            "d": kinematics.d,
+            "r_o": kinematics.r_o,
+            "theta_o_valid": kinematics.theta_o_valid,
+            "s_h_valid": kinematics.s_h_valid,
+            "contact_valid": kinematics.contact_valid,
+            "compliance": kinematics.compliance,
+            "compliance_std": kinematics.compliance_std,
+            "skipped": skipped,
+            "kinematics_mean": rough[0],
+            "kinematics_std": rough[1],
+            "gravity": gravity,
+            "hand_slid": hand_slid,
+        },
     )
-
-
-_MODE_FIELDS = ("hand_mode", "hand_geometry", "ground_mode")
-"""Fields an :class:`Estimate` takes from the classified :class:`~ccopt.modes.ContactConfiguration`."""
-_KINEMATIC_FIELDS = (
-    "s_h",
-    "s_g",
-    "d",
-    "r_o",
-    "theta_o_valid",
-    "s_h_valid",
-    "contact_valid",
-    "compliance",
-    "compliance_std",
-)
-"""Fields an :class:`Estimate` takes from the :class:`~ccopt.estimation.kinematics.KinematicEstimate`
-(its ``θ_o`` goes through the angle filter first)."""
 
 
 _UNKNOWN_KINEMATICS = KinematicEstimate(

@@ -93,7 +93,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ccopt import geometry
+from ccopt import geometry, validation
 from ccopt.estimation.quantile import check_count, check_number
 from ccopt.modes import ContactConfiguration, ContactMode, HandGeometry
 
@@ -545,24 +545,27 @@ class KinematicEstimator:
         )
         contact_valid = max(std[0], std[1], std[2]) <= params.valid_std
         s_h_valid = s_h_defined and contact_valid and std[3] <= params.valid_std
-        return KinematicEstimate(
-            theta_o=self._theta_o,
-            s_h=s_h if s_h_valid else nan,
-            s_g=x_o if contact_valid else nan,
-            d=d if contact_valid else nan,
-            r_o=np.array((x_o, y_o) if contact_valid else (nan, nan)),
-            std=std,
-            theta_o_valid=self._theta_o_valid,
-            s_h_valid=s_h_valid,
-            contact_valid=contact_valid,
-            rough=rough,
-            theta_std=self._theta_std if self._theta_o_valid else nan,
-            compliance=state[C],
-            compliance_std=sqrt(max(cov[C][C], 0.0)),
-            normal_compliance=state[K],
-            resets=self.resets,
-            anchor=self.anchor,
-            ground_fixed=fixed,
+        return validation.trusted(  # every field, each well formed by construction
+            KinematicEstimate,
+            {
+                "theta_o": self._theta_o,
+                "s_h": s_h if s_h_valid else nan,
+                "s_g": x_o if contact_valid else nan,
+                "d": d if contact_valid else nan,
+                "r_o": np.array((x_o, y_o) if contact_valid else (nan, nan)),
+                "std": std,
+                "theta_o_valid": self._theta_o_valid,
+                "s_h_valid": s_h_valid,
+                "contact_valid": contact_valid,
+                "rough": rough,
+                "theta_std": self._theta_std if self._theta_o_valid else nan,
+                "compliance": state[C],
+                "compliance_std": sqrt(max(cov[C][C], 0.0)),
+                "normal_compliance": state[K],
+                "resets": self.resets,
+                "anchor": self.anchor,
+                "ground_fixed": fixed,
+            },
         )
 
 

@@ -61,7 +61,7 @@ class GraphParams:
             raise ValueError(f"hand_slide must be a multiple of s_h_step, got {self.hand_slide!r}")
         if not math.isfinite(self.min_margin):
             raise ValueError(f"min_margin must be a finite number of N, got {self.min_margin!r}")
-        if not (self.theta_range[0] < self.theta_range[1] and self.s_h_range[0] <= self.s_h_range[1]):
+        if not (self.theta_range[0] <= self.theta_range[1] and self.s_h_range[0] <= self.s_h_range[1]):
             raise ValueError(f"empty ranges: θ {self.theta_range}, s_h {self.s_h_range}")
 
 

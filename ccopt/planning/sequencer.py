@@ -15,6 +15,10 @@ answers, every time a motion ends, with the next motion or with how the goal end
 * ``failed`` — the estimate became unusable, or :attr:`GoalSequencer.max_misses` planned motions
   in a row did not do what they commanded.
 
+A pivot that ends ``rolled`` (the hand rolled on the face: the object stopped turning, it lies on
+another vertex or a face) marks the tilt it began at as a limit that way for the rest of the run
+(:attr:`GoalSequencer.tilt_limits`): what the estimate knows of the object's tipping points.
+
 ``s_g`` goals are measured from ``s_g_origin``, the estimated ground contact when the kinematics
 first became usable (the run's start, unless the ground slid before).
 """
@@ -101,6 +105,7 @@ class GoalSequencer:
         reach: tuple[float, float],
         aim: TargetGoal,
         params: PlannerParams | None = None,
+        tilt_limits: dict[int, float] | None = None,
     ) -> None:
         self.index = index
         self.goal = goal
@@ -110,6 +115,10 @@ class GoalSequencer:
         self.params = params or PlannerParams()
         self.motions = 0
         self.misses = 0
+        self.tilt_limits = {} if tilt_limits is None else tilt_limits
+        """Per way (``±1``), the tilt (rad) past which a pivot that way rolled the hand instead of
+        turning the object (it landed on another vertex or a face): plans keep within. The run's
+        goals share it (it is the object's, not the goal's)."""
         self.failed_slides: dict[int, float] = {}
         """Per way (``±1``), the tilt (rad) of the last ground slide that did not start."""
         self._exploration: list[Step] | None = None
@@ -125,6 +134,8 @@ class GoalSequencer:
             step, tilt = self._last
             if step.kind == "slide_ground":
                 self.failed_slides[1 if step.delta > 0 else -1] = tilt
+            if step.kind == "pivot" and last_status == "rolled":
+                self.tilt_limits[1 if step.delta > 0 else -1] = tilt
         if now - self.start_time >= self.goal.timeout:
             return self.end(now, "timeout", f"the goal's {self.goal.timeout:g} s ran out")
         if self.misses >= self.max_misses:
@@ -155,7 +166,7 @@ class GoalSequencer:
                 where,
                 self.goal,
                 s_g_origin,
-                self.reach,
+                self._reach(),
                 estimate.torque_lever,
                 forces,
                 self.params,
@@ -169,6 +180,12 @@ class GoalSequencer:
         if bolder.status != "move":
             return plan
         return Plan(bolder.status, bolder.motion, bolder.reason, bolder.path, explores=True)
+
+    def _reach(self) -> tuple[float, float]:
+        """The robot's reach, cut at the tilts where a pivot rolled the hand."""
+        low, high = self.reach
+        low, high = max(low, self.tilt_limits.get(-1, low)), min(high, self.tilt_limits.get(1, high))
+        return min(low, high), high
 
     def _take(self, step: Step) -> Step:
         self.motions += 1
