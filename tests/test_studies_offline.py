@@ -53,6 +53,9 @@ def test_qp_region_writes_its_figures(tmp_path, motion):
         assert (tmp_path / name).stat().st_size > 10_000
     result = json.loads((tmp_path / "results.json").read_text())
     assert result["feasible"] and not result["region_empty"]
+    step, vertices = np.array(result["step"]), np.array(result["region_vertices"])  # one unit: SI
+    assert np.all(step >= vertices.min(axis=0) - 1e-9) and np.all(step <= vertices.max(axis=0) + 1e-9)
+    assert 0.0 < np.abs(step[:2]).max() < 0.005  # a tick moves the hand by millimetres, in m
 
 
 def test_qp_solution_lies_in_the_drawn_region():
