@@ -81,9 +81,9 @@ def test_qp_solution_lies_in_the_drawn_region():
         ["feasibility", "--mu-hand", "-0.2,0.5"],
         ["feasibility", "--force-limits", "3"],
         ["gradients", "--points", "0"],
-        ["qp-region", "--wrench", "1,2"],
-        ["qp-region", "--motion", "fly"],
-        ["qp-region", "--mass", "-1"],
+        ["qp_region", "--wrench", "1,2"],
+        ["qp_region", "--motion", "fly"],
+        ["qp_region", "--mass", "-1"],
         ["no-such-study"],
     ],
 )
@@ -93,6 +93,7 @@ def test_bad_values_give_one_line_and_exit_2(argv, capsys):
     assert exit_info.value.code == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "error" in err
+    assert ("unknown study" in err) == (argv[0] == "no-such-study"), err  # the study's own check said it
 
 
 def test_out_must_be_a_folder(tmp_path, capsys):
