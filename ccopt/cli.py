@@ -22,25 +22,33 @@ folder; interrupted while drawing, no figure cut short.
 from __future__ import annotations
 
 import argparse
+import math
 import runpy
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ccopt import __version__, objects, record, validation
-from ccopt.cliutil import INTERRUPTED, OneLineParser, fail, print_table, seed_value, stop_signals
-from ccopt.objects import PlanarObject
-from ccopt.plant.base import MIN_RATE, PlantParams
-from ccopt.schedule import Schedule, load_schedule
+from ccopt import __version__, config, objects, record
+from ccopt.cliutil import (
+    INTERRUPTED,
+    OneLineParser,
+    fail,
+    fail_lines,
+    print_scripts,
+    print_table,
+    scripts,
+    seed_value,
+    stop_signals,
+)
+from ccopt.plant.base import MIN_RATE
+from ccopt.schedule import BUILTIN
 
 if TYPE_CHECKING:
-    from ccopt.closed_loop import LoopParams
     from ccopt.plant.sensors import Fault
-
-BENCHMARKS = ("qp_latency", "plant_speed", "estimator_speed")
 
 
 def parse_vertices(text: str) -> np.ndarray:
@@ -55,28 +63,6 @@ def parse_vertices(text: str) -> np.ndarray:
     return vertices * 1e-3
 
 
-def check_numbers(args: argparse.Namespace) -> None:
-    """The numbers of ``ccopt run``, each named by its flag in a ``ValueError``: finite, masses and
-    friction in range, rates from :data:`MIN_RATE` to the plant's own rate.
-
-    A run needs friction at both contacts (μ > 0): without it the hand cannot push the object
-    sideways and the object cannot pivot on the ground, and the friction estimate has nothing to
-    measure.
-    """
-
-    if args.mass is not None:
-        validation.positive("--mass", args.mass)
-    if not validation.real("--added-mass", args.added_mass) >= 0.0:
-        raise ValueError(f"--added-mass must be a non-negative number of kg, got {args.added_mass!r}")
-    for flag, mu in (("--mu-hand", args.mu_hand), ("--mu-ground", args.mu_ground)):
-        if not (validation.real(flag, mu) > 0.0):
-            raise ValueError(f"{flag} must be positive (a run needs friction at both contacts), got {mu!r}")
-    top = 1.0 / PlantParams().timestep
-    for flag, rate in (("--estimator-hz", args.estimator_hz), ("--controller-hz", args.controller_hz)):
-        if not MIN_RATE <= validation.real(flag, rate) <= top:
-            raise ValueError(f"{flag} must be in [{MIN_RATE:g}, {top:g}] Hz (the plant's rate), got {rate!r}")
-
-
 def fault_value(text: str) -> Fault:
     """argparse type: a sensor fault ``KIND[:VALUE][@START_S]`` (:func:`ccopt.plant.sensors.parse_fault`)."""
     from ccopt.plant.sensors import parse_fault
@@ -87,34 +73,151 @@ def fault_value(text: str) -> Fault:
         raise argparse.ArgumentTypeError(str(error)) from None
 
 
-def build_object(args: argparse.Namespace) -> PlanarObject:
-    """The object the user asked for (the controller is never told any of it)."""
-    friction = {"mu_hand": args.mu_hand, "mu_ground": args.mu_ground}
-    if args.vertices is not None:
-        mass = args.mass if args.mass is not None else 0.3
-        return objects.from_vertices(parse_vertices(args.vertices), mass + args.added_mass, **friction)
-    return objects.make_object(args.object, mass=args.mass, added_mass=args.added_mass, **friction)
+def numbers(count: int) -> Callable[[str], tuple[float, ...]]:
+    """argparse type: ``count`` comma-separated numbers."""
+
+    def parse(text: str) -> tuple[float, ...]:
+        try:
+            values = tuple(float(v) for v in text.split(","))
+        except ValueError:
+            values = ()
+        if len(values) != count:
+            raise argparse.ArgumentTypeError(f"{text!r} is not {count} comma-separated numbers")
+        return values
+
+    return parse
+
+
+@dataclass(frozen=True)
+class Flag:
+    """A settings flag of ``ccopt run``: where its value goes in the settings (:mod:`ccopt.config`) and
+    the factor from the flag's unit (mm, deg) to SI."""
+
+    name: str
+    path: tuple[str, ...]
+    help: str
+    metavar: str | None = None
+    factor: float = 1.0
+    type: Callable[[str], object] = float
+
+
+MM, DEG = 1e-3, math.pi / 180.0
+RUN_FLAGS = (
+    Flag("--mass", ("object", "mass"), "object mass, kg (default: the object's)", "KG"),
+    Flag("--added-mass", ("object", "added_mass"), "mass added to the object, kg (≥ 0)", "KG"),
+    Flag("--mu-hand", ("object", "mu_hand"), "hand/object friction coefficient (> 0; default: 0.5)", "MU"),
+    Flag(
+        "--mu-ground", ("object", "mu_ground"), "object/ground friction coefficient (> 0; default: 0.8)", "MU"
+    ),
+    Flag("--estimator-hz", ("params", "estimator_hz"), f"Hz, at least {MIN_RATE:g} (default: 100)", "HZ"),
+    Flag("--controller-hz", ("params", "controller_hz"), f"Hz, at least {MIN_RATE:g} (default: 30)", "HZ"),
+    Flag(
+        "--max-sim-s",
+        ("params", "max_sim_s"),
+        "end the run (status timeout) after S s of simulated time (default: by the schedule)",
+        "S",
+    ),
+    Flag("--l-hand", ("params", "hand", "half_length"), "hand half-length l_h, mm (default: 30)", "MM", MM),
+    Flag(
+        "--stiffness",
+        ("params", "hand", "stiffness"),
+        "hand impedance k_x,k_y,k_θ: N/m, N/m, N·m/rad (default: 2000,2000,60)",
+        "KX,KY,KTHETA",
+        type=numbers(3),
+    ),
+    Flag(
+        "--force-limits",
+        ("params", "hand", "force_limits"),
+        "the hand's smallest and largest normal force, N (default: 3,25)",
+        "FMIN,FMAX",
+        type=numbers(2),
+    ),
+    Flag(
+        "--theta",
+        ("params", "start", "theta_o"),
+        "start tilt θ_o of the hand face, deg (default: 17.2)",
+        "DEG",
+        DEG,
+    ),
+    Flag(
+        "--face", ("params", "start", "hand_face"), "object face the hand starts on (default: 0)", "K", 1, int
+    ),
+    Flag(
+        "--s-hand",
+        ("params", "start", "s_h"),
+        "start s_h, mm (default: as close over the ground contact as the hand fits)",
+        "MM",
+        MM,
+    ),
+    Flag("--noise-force", ("params", "sensors", "sigma_force"), "F/T force noise, N (default: 0.3)", "N"),
+    Flag(
+        "--noise-torque",
+        ("params", "sensors", "sigma_torque"),
+        "F/T torque noise, N·m (default: 0.005)",
+        "NM",
+    ),
+    Flag(
+        "--noise-position",
+        ("params", "sensors", "sigma_position"),
+        "hand position noise, mm (default: 0.2)",
+        "MM",
+        MM,
+    ),
+    Flag(
+        "--noise-angle",
+        ("params", "sensors", "sigma_angle"),
+        "hand angle noise, deg (default: 0.1)",
+        "DEG",
+        DEG,
+    ),
+    Flag(
+        "--convergence-rate",
+        ("params", "controller", "convergence_rate"),
+        "controller: rate at which the commanded coordinate's error is corrected, 1/s (default: 10.7)",
+        "PER_S",
+    ),
+    Flag(
+        "--force-rate",
+        ("params", "controller", "force_rate"),
+        "controller: rate at which the normal-force error is corrected, 1/s (default: 6.7)",
+        "PER_S",
+    ),
+    Flag(
+        "--normal-force",
+        ("params", "controller", "normal_force"),
+        "controller: target normal force, N, inside --force-limits (default: 10)",
+        "N",
+    ),
+)
+"""The settings flags of ``ccopt run`` (besides ``--object``, ``--vertices``, ``--plant``, ``--schedule``,
+``--seed`` and ``--fault``)."""
 
 
 def _run_parser(commands: argparse._SubParsersAction) -> None:
     run = commands.add_parser(
         "run",
         help="manipulate an unknown object through a schedule",
+        description="Manipulate an unknown object through a schedule. Settings come from the defaults, "
+        "then --config FILE, then the flags given (degrees and mm at the command line, SI in files).",
         epilog="exit status: 0 completed, 3 ended early (contact_lost, sensor_fault, timeout), "
         "1 error in the run, 2 bad input, 130 interrupted (Ctrl-C, SIGTERM, SIGHUP)",
     )
+    run.add_argument(
+        "--config",
+        metavar="FILE",
+        help="settings file (.yaml/.json, SI; see ccopt/config.py) or a run's meta.json, which repeats it",
+    )
     shape = run.add_mutually_exclusive_group()
-    shape.add_argument("--object", default="paper-triangle", help="library object name")
+    shape.add_argument(
+        "--object", help="library object name (ccopt objects lists them; default: paper-triangle)"
+    )
     shape.add_argument("--vertices", help="convex polygon 'x,y;x,y;...' in mm, counter-clockwise")
-    run.add_argument("--mass", type=float, help="object mass, kg (default: the object's)")
-    run.add_argument("--added-mass", type=float, default=0.0, help="mass added to the object, kg (≥ 0)")
-    run.add_argument("--mu-hand", type=float, default=0.5, help="hand/object friction coefficient (> 0)")
-    run.add_argument("--mu-ground", type=float, default=0.8, help="object/ground friction coefficient (> 0)")
-    run.add_argument("--plant", choices=("planar", "panda"), default="planar")
-    run.add_argument("--schedule", default="paper", help="built-in name (paper, smoke) or a .yaml/.json file")
-    run.add_argument("--seed", type=seed_value, default=0, help="seed of the sensor noise, in [0, 2**64)")
-    run.add_argument("--estimator-hz", type=float, default=100.0, help=f"Hz, at least {MIN_RATE:g}")
-    run.add_argument("--controller-hz", type=float, default=30.0, help=f"Hz, at least {MIN_RATE:g}")
+    run.add_argument("--plant", choices=("planar", "panda"), help="simulated robot (default: planar)")
+    builtin = ", ".join(BUILTIN)
+    run.add_argument("--schedule", help=f"built-in name ({builtin}) or a .yaml/.json file (default: paper)")
+    run.add_argument("--seed", type=seed_value, help="seed of the sensor noise, in [0, 2**64) (default: 0)")
+    for flag in RUN_FLAGS:
+        run.add_argument(flag.name, type=flag.type, metavar=flag.metavar, help=flag.help)
     run.add_argument(
         "--fault",
         type=fault_value,
@@ -124,58 +227,78 @@ def _run_parser(commands: argparse._SubParsersAction) -> None:
         help="a sensor fault from START_S on (repeatable): dropout:P, dead-ft, stuck-ft, scale-ft:K, "
         "bias-ft:N, spikes-ft:N, delay:S, dead-pose",
     )
-    run.add_argument(
-        "--max-sim-s",
-        type=float,
-        metavar="S",
-        help="end the run (status timeout) after S s of simulated time (default: by the schedule)",
-    )
     run.add_argument("--out", default="runs/latest", help="run folder, new or empty (created)")
     run.add_argument(
         "--overwrite", action="store_true", help="clear a previous run's files from --out first (only those)"
     )
-    run.add_argument("--no-figures", action="store_true", help="skip the figures and the GIF")
+    run.add_argument(
+        "--figures",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="draw the figures and the GIF after the run (default: yes)",
+    )
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
-def run_inputs(args: argparse.Namespace) -> tuple[PlanarObject, Schedule, LoopParams]:
-    """The object, schedule and loop parameters of ``ccopt run``, every argument checked (``ValueError``
-    or ``TypeError`` naming it), the hand's start on the object included: nothing is created yet."""
-    from ccopt.closed_loop import LoopParams, Supervision, start_config
-    from ccopt.plant.sensors import SensorParams
-
-    check_numbers(args)
-    obj = build_object(args)
-    schedule = load_schedule(args.schedule)
-    try:
-        supervision = Supervision(max_time=args.max_sim_s)
-    except (ValueError, TypeError) as error:
-        raise ValueError(f"--max-sim-s: {error}") from None
-    params = LoopParams(
-        plant=args.plant,
-        estimator_hz=args.estimator_hz,
-        controller_hz=args.controller_hz,
-        sensor_params=SensorParams(faults=tuple(args.fault)),
-        supervision=supervision,
-    )
-    start_config(obj, params)  # the hand must fit on the object's face
-    return obj, schedule, params
+def run_settings(args: argparse.Namespace) -> tuple[dict[str, object], dict[tuple[str, ...], str]]:
+    """The settings mapping of ``ccopt run`` (:mod:`ccopt.config`, SI): the ``--config`` file's, with the
+    flags given put in; and what to call each value a flag set in a message (the flag and its text).
+    ``--object`` and ``--vertices`` replace the file's object, ``--mass`` and the others change it."""
+    settings = config.read_file(args.config) if args.config is not None else {}
+    labels: dict[tuple[str, ...], str] = {}
+    given: dict[tuple[str, ...], object] = {}
+    if args.object is not None:
+        settings["object"], labels[("object",)] = {"name": args.object}, f"--object {args.object}"
+    if args.vertices is not None:
+        settings["object"] = {"vertices": parse_vertices(args.vertices).tolist()}
+        labels[("object",)] = f"--vertices {args.vertices}"
+    if isinstance(settings.get("object"), str):
+        settings["object"] = {"name": settings["object"]}
+    for key, value in (("schedule", args.schedule), ("seed", args.seed)):
+        if value is not None:
+            given[(key,)], labels[(key,)] = value, f"--{key}"
+    if args.plant is not None:
+        given[("params", "plant")] = args.plant
+    for flag in RUN_FLAGS:
+        value = getattr(args, flag.name[2:].replace("-", "_"))
+        if value is not None:
+            shown = ",".join(f"{v:g}" for v in value) if isinstance(value, tuple) else f"{value:g}"
+            scaled = (
+                tuple(v * flag.factor for v in value) if isinstance(value, tuple) else value * flag.factor
+            )
+            given[flag.path], labels[flag.path] = scaled, f"{flag.name} {shown}"
+    if args.s_hand is not None:
+        given[("params", "centre_hand")] = False
+    if args.fault:
+        given[("params", "sensors", "faults")] = [str(fault) for fault in args.fault]
+        labels[("params", "sensors", "faults")] = "--fault"
+    overrides: dict[str, object] = {}
+    for path, value in given.items():
+        node = overrides
+        for key in path[:-1]:
+            node = node.setdefault(key, {})
+        node[path[-1]] = value
+    return config.merge(settings, overrides), labels
 
 
 def _command_run(args: argparse.Namespace, prog: str) -> int:
     from ccopt import experiment
 
     try:
-        obj, schedule, params = run_inputs(args)
-    except (ValueError, TypeError) as error:
+        settings, labels = run_settings(args)
+        chosen = config.build(settings, labels)
+    except config.ConfigError as error:
+        fail_lines(prog, error.lines)
+    except ValueError as error:
         fail(prog, str(error))
+    obj, schedule, params, seed = chosen.obj, chosen.schedule, chosen.params, chosen.seed
     folder, created = Path(args.out), record.missing_folders(args.out)
     try:
         try:
             record.prepare_folder(folder, overwrite=args.overwrite)
         except ValueError as error:
             fail(prog, str(error))
-        done = run_with_progress(experiment, obj, schedule, params, args, folder)
+        done = run_with_progress(experiment, obj, schedule, params, seed, args, folder)
     except KeyboardInterrupt:
         if _discard(folder, created):
             sys.stderr.write(f"{prog}: interrupted before the run started; nothing was recorded\n")
@@ -192,7 +315,7 @@ def _command_run(args: argparse.Namespace, prog: str) -> int:
     if status != "completed":
         sys.stderr.write(f"{prog}: {status}: {message}\n")
     loaded = record.load_record(folder)
-    if not args.no_figures and loaded.data:
+    if args.figures and loaded.data:
         draw_figures(loaded, folder, prog)
     return EXIT_CODES[status]
 
@@ -267,7 +390,7 @@ def _figure_files(folder: Path) -> dict[Path, tuple[int, int, int]]:
     return found
 
 
-def run_with_progress(experiment, obj, schedule, params, args, folder):
+def run_with_progress(experiment, obj, schedule, params, seed, args, folder):
     """Run the experiment with a tqdm bar over the schedule's steps (unless ``--no-progress``); the
     oracle's warnings about impossible steps go to stderr first."""
     from tqdm import tqdm
@@ -283,7 +406,7 @@ def run_with_progress(experiment, obj, schedule, params, args, folder):
             print(f"warning: {line}", file=sys.stderr)
 
         return experiment.run_experiment(
-            obj, schedule, params, seed=args.seed, folder=folder, on_tick=on_tick, warn=warn
+            obj, schedule, params, seed=seed, folder=folder, on_tick=on_tick, warn=warn
         )
 
 
@@ -371,27 +494,66 @@ def goal_rows(goals: list[dict]) -> list[tuple[str, ...]]:
     return rows
 
 
-def _command_plot(args: argparse.Namespace, prog: str) -> int:
+def _loaded(prog: str, folder: str) -> record.Record:
+    """The run in ``folder``, or one line and exit 2 if it is not a run folder or holds no sample."""
     try:
-        loaded = record.load_record(args.record)
+        loaded = record.load_record(folder)
     except ValueError as error:
         fail(prog, str(error))
     if not loaded.data:
-        fail(prog, f"{args.record!r} holds no sample of its run (meta.json's run_id): nothing to draw")
-    return 0 if draw_figures(loaded, Path(args.record), prog) else 1
+        fail(prog, f"{folder!r} holds no sample of its run (meta.json's run_id): nothing to show")
+    return loaded
+
+
+def _command_plot(args: argparse.Namespace, prog: str) -> int:
+    return 0 if draw_figures(_loaded(prog, args.record), Path(args.record), prog) else 1
+
+
+def _command_objects(args: argparse.Namespace, prog: str) -> int:
+    """List the object library: faces, face lengths, size, mass and friction."""
+    rows = []
+    for name in objects.OBJECT_NAMES:
+        obj = objects.make_object(name)
+        lengths = [obj.face_length(k) * 1e3 for k in range(obj.n_faces)]
+        size = np.ptp(obj.vertices, axis=0) * 1e3
+        rows.append(
+            (
+                name,
+                str(obj.n_faces),
+                f"{min(lengths):.0f}–{max(lengths):.0f}"
+                if max(lengths) - min(lengths) > 0.5
+                else f"{lengths[0]:.0f}",
+                f"{size[0]:.0f} × {size[1]:.0f}",
+                f"{obj.mass:.3f}",
+                f"{obj.mu_hand:g}",
+                f"{obj.mu_ground:g}",
+            )
+        )
+    print_table(
+        rows, ("object", "faces", "face (mm)", "width × height (mm)", "mass (kg)", "μ_hand", "μ_ground")
+    )
+    print(
+        "ccopt run --object NAME [--mass KG] [--added-mass KG] [--mu-hand MU] [--mu-ground MU]; "
+        "any convex polygon: --vertices 'x,y;x,y;...' (mm)"
+    )
+    return 0
 
 
 def _command_bench(args: argparse.Namespace, prog: str) -> int:
-    if args.name not in BENCHMARKS:
-        fail(prog, f"unknown benchmark {args.name!r}; expected one of: {', '.join(BENCHMARKS)}")
-    sys.argv = [f"benchmarks.{args.name}", *args.rest]
+    benchmarks = scripts("benchmarks")
+    if args.name is None:
+        print_scripts("benchmarks:", benchmarks, "run one with 'ccopt bench NAME [--quick] [--json PATH]'")
+        return 0
+    if args.name not in benchmarks:
+        fail(prog, f"unknown benchmark {args.name!r}; expected one of: {', '.join(benchmarks)}")
+    sys.argv = [f"ccopt bench {args.name}", *args.rest]
     runpy.run_module(f"benchmarks.{args.name}", run_name="__main__")
     return 0
 
 
 def _command_study(args: argparse.Namespace, prog: str) -> int:
-    """Hand over to ``python -m studies`` (the library does not depend on its studies)."""
-    sys.argv = ["studies", args.name, *args.rest]
+    """Hand over to ``studies.__main__`` (the library does not depend on its studies)."""
+    sys.argv = ["ccopt study", *([args.name] if args.name else []), *args.rest]
     try:
         runpy.run_module("studies", run_name="__main__")
     except SystemExit as done:
@@ -399,29 +561,70 @@ def _command_study(args: argparse.Namespace, prog: str) -> int:
     return 0
 
 
+def _command_view(args: argparse.Namespace, prog: str) -> int:
+    """Log a run to Rerun: saved to ``--save`` or shown in a viewer it starts."""
+    from ccopt import view
+
+    loaded = _loaded(prog, args.record)
+    try:
+        saved = view.log_run(loaded, save=args.save)
+    except view.RerunMissing as error:
+        fail(prog, str(error))
+    except OSError as error:
+        fail(prog, f"cannot write {args.save!r}: {error.strerror or error}")
+    if saved is not None:
+        print(f"saved {saved} (open it with: rerun {saved})")
+    return 0
+
+
+COMMANDS = {
+    "run": (_command_run, "manipulate an unknown object through a schedule"),
+    "plot": (_command_plot, "(re)draw the figures of a run folder"),
+    "view": (_command_view, "look into a run with Rerun (scene, estimates vs truth, QP) or save it as .rrd"),
+    "objects": (_command_objects, "list the objects of the library"),
+    "study": (_command_study, "run a scripted study; without a name, list them"),
+    "bench": (_command_bench, "run a speed benchmark; without a name, list them"),
+}
+"""Subcommand → (handler, one line of help)."""
+
+
 def make_parser() -> OneLineParser:
-    parser = OneLineParser(prog="ccopt", description="Manipulate unknown objects through contact.")
+    parser = OneLineParser(
+        prog="ccopt",
+        description="Manipulate unknown objects through contact: estimate the contact configuration from "
+        "the wrist wrench and the hand pose, and regulate it with a QP (Doshi, Taylor & Rodriguez).",
+        epilog="start with: ccopt run --schedule smoke --out runs/first; then ccopt plot runs/first",
+    )
     parser.add_argument("--version", action="version", version=f"ccopt {__version__}")
-    commands = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
+    commands = parser.add_subparsers(dest="command", parser_class=OneLineParser, metavar="COMMAND")
     _run_parser(commands)
-    plot = commands.add_parser("plot", help="(re)draw the figures of a run folder")
+    plot = commands.add_parser("plot", help=COMMANDS["plot"][1])
     plot.add_argument("record", help="run folder")
-    study = commands.add_parser("study", help="run a scripted study (see studies/)")
-    study.add_argument("name", help="feasibility, qp-region, gradients, ...")
+    view = commands.add_parser("view", help=COMMANDS["view"][1])
+    view.add_argument("record", help="run folder")
+    view.add_argument(
+        "--save", metavar="FILE.rrd", help="write the recording here instead of opening a viewer"
+    )
+    commands.add_parser("objects", help=COMMANDS["objects"][1])
+    study = commands.add_parser("study", help=COMMANDS["study"][1])
+    study.add_argument("name", nargs="?", help="the study (ccopt study lists them)")
     study.add_argument("rest", nargs=argparse.REMAINDER, help="arguments for the study")
-    bench = commands.add_parser("bench", help="run a speed benchmark (see benchmarks/)")
-    bench.add_argument("name", help=", ".join(BENCHMARKS))
+    bench = commands.add_parser("bench", help=COMMANDS["bench"][1])
+    bench.add_argument("name", nargs="?", help="the benchmark (ccopt bench lists them)")
     bench.add_argument("rest", nargs=argparse.REMAINDER, help="arguments for the benchmark")
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args = make_parser().parse_args(argv)
+    parser = make_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:
+        parser.print_help()
+        return 0
     prog = f"ccopt {args.command}"
-    handlers = {"run": _command_run, "plot": _command_plot, "study": _command_study, "bench": _command_bench}
     with stop_signals(prog):
         try:
-            return handlers[args.command](args, prog)
+            return COMMANDS[args.command][0](args, prog)
         except KeyboardInterrupt:
             sys.stderr.write(f"{prog}: interrupted\n")
             return INTERRUPTED

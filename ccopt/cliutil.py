@@ -4,11 +4,14 @@ argument types, the stop signals, JSON output."""
 from __future__ import annotations
 
 import argparse
+import ast
+import importlib.util
 import json
+import pkgutil
 import signal
 import sys
 import threading
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import NoReturn
@@ -33,6 +36,13 @@ class OneLineParser(argparse.ArgumentParser):
 def fail(prog: str, message: str) -> NoReturn:
     """Print ``prog: error: message`` on one line and exit with status 2 (bad input)."""
     sys.stderr.write(f"{prog}: error: {message}\n")
+    raise SystemExit(2)
+
+
+def fail_lines(prog: str, messages: Sequence[str]) -> NoReturn:
+    """Print ``prog: error: message`` for each message, one line each, and exit with status 2."""
+    for message in messages:
+        sys.stderr.write(f"{prog}: error: {message}\n")
     raise SystemExit(2)
 
 
@@ -103,7 +113,7 @@ def writable_json_path(value: str) -> Path:
 def benchmark_parser(name: str, doc: str, quick: str, seed: str | None = None) -> OneLineParser:
     """The parser every benchmark shares: ``--quick`` (``quick`` says what it shrinks), ``--json PATH``
     and, with a ``seed`` help text, ``--seed``."""
-    parser = OneLineParser(prog=f"python -m benchmarks.{name}", description=doc.split("\n")[0])
+    parser = OneLineParser(prog=f"ccopt bench {name}", description=doc.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help=quick)
     parser.add_argument("--json", type=writable_json_path, metavar="PATH", help="write the figures here")
     if seed is not None:
@@ -121,3 +131,30 @@ def print_table(rows: list[tuple[str, ...]], header: tuple[str, ...]) -> None:
     widths = [max(len(str(r[i])) for r in [header, *rows]) for i in range(len(header))]
     for row in [header, tuple("-" * w for w in widths), *rows]:
         print("  ".join(str(cell).ljust(width) for cell, width in zip(row, widths, strict=True)))
+
+
+def scripts(package: str) -> dict[str, str]:
+    """The runnable scripts of ``package`` (``studies``, ``benchmarks``): every module of it, not private,
+    that defines a top-level ``main``, by name, with the first line of its docstring. Read from the
+    source, nothing imported (listing the studies loads none of them); ``{}`` if the package is absent."""
+    spec = importlib.util.find_spec(package)
+    if spec is None or not spec.submodule_search_locations:
+        return {}
+    found = {}
+    for module in sorted(pkgutil.iter_modules(spec.submodule_search_locations), key=lambda m: m.name):
+        if module.name.startswith("_") or module.ispkg:
+            continue
+        source = importlib.util.find_spec(f"{package}.{module.name}").origin
+        tree = ast.parse(Path(source).read_text(encoding="utf-8"))
+        if any(isinstance(node, ast.FunctionDef) and node.name == "main" for node in tree.body):
+            found[module.name] = (ast.get_docstring(tree) or "").strip().split("\n")[0]
+    return found
+
+
+def print_scripts(title: str, found: dict[str, str], usage: str) -> None:
+    """List ``found`` (name → one line) under ``title``, then ``usage``."""
+    print(title)
+    width = max((len(name) for name in found), default=0)
+    for name, line in found.items():
+        print(f"  {name.ljust(width)}  {line}")
+    print(usage)

@@ -10,8 +10,10 @@ metadata keys:
    oracle found impossible (``impossible_steps``) and how often the kinematics were lost
    (``kinematics_resets``), written to ``summary.json``.
 
-``meta.json`` holds ``object``, ``schedule``, ``seed``, ``params`` (plant, rates, hand, start) and
-``feasibility`` (the oracle's check of every step); the loop adds ``steps`` and ``status``.
+``meta.json`` holds the run's settings (``object``, ``schedule``, ``seed``, ``params``: the form
+:mod:`ccopt.config` reads, so ``ccopt run --config RUN_DIR/meta.json`` repeats the run), ``units``,
+``record_units`` (every array of ``record.npz``: its unit and frame) and ``feasibility`` (the oracle's
+check of every step); the loop adds ``steps`` and ``status``.
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ccopt import closed_loop, feasibility_map, metrics, statics
+from ccopt import closed_loop, config, feasibility_map, metrics, statics
 from ccopt.closed_loop import LoopParams, RunResult
 from ccopt.feasibility_map import FeasibilityMap
 from ccopt.objects import PlanarObject
@@ -56,31 +58,44 @@ class Experiment:
     feasibility_map: FeasibilityMap | None = None
 
 
-def object_meta(obj: PlanarObject) -> dict[str, object]:
-    """The object as ``meta.json`` stores it (what :mod:`ccopt.plots` rebuilds it from). SI units."""
-    return {
-        "name": obj.name,
-        "vertices": obj.vertices.tolist(),
-        "mass": obj.mass,
-        "mu_hand": obj.mu_hand,
-        "mu_ground": obj.mu_ground,
-    }
+RECORD_UNITS = {
+    "time": "s",
+    "hand_pose": "measured hand pose (x_h, y_h, θ_h): m, m, rad, world",
+    "hand_wrench": "measured hand wrench (f_n, f_t, τ) on the object: N, N, N·m, hand frame",
+    "target": "impedance target (x, y, θ): m, m, rad, world",
+    "est_coordinates": "estimated (θ_o, s_h, s_g): rad, m, m",
+    "est_d": "estimated d (ground contact to hand face along e_n): m",
+    "est_kinematics_valid": "bool: the kinematics are estimated",
+    "est_mu_h": "estimated hand friction coefficient (NaN: not yet)",
+    "est_ground_rows": "estimated ground cone rows A (2×2), world hand force (f_x, f_y): A f ≤ b",
+    "est_ground_bounds": "estimated ground cone bounds b (2): N",
+    "est_modes": "estimated (hand slide, hand pivot, ground slide): −1/0/+1, 0 sticking",
+    "step_index": "schedule step (−1 before the first)",
+    "motion": "commanded motion: 0 hold, 1 pivot, 2 slide_hand, 3 slide_ground",
+    "command_targets": "commanded (θ_o, s_h, s_g): rad, m, m (NaN: no command)",
+    "qp_slack": "the QP's slack (0: feasible): scaled units",
+    "qp_feasible": "bool: the QP was feasible",
+    "true_coordinates": "true (θ_o, s_h, s_g): rad, m, m",
+    "true_d": "true d: m",
+    "true_modes": "true (hand slide, hand pivot, ground slide): −1/0/+1",
+    "true_contacts": "bool (hand, ground): the contact exists",
+    "true_slip_rates": "true slip speed (hand, ground): m/s",
+    "true_hand_pose": "true hand pose: m, m, rad, world",
+    "true_hand_wrench": "true hand wrench (f_n, f_t, τ): N, N, N·m, hand frame",
+}
+"""Unit and frame of every array of ``record.npz`` (one row per estimator sample), as ``meta.json``
+records them (``record_units``); hand frame and signs as in :mod:`ccopt.geometry`."""
+SUMMARY_UNITS = (
+    f"{config.UNITS}; slip_events excursion in m (hand_slide, ground_slide) or rad (hand_pivot); "
+    "ratios and shares unitless"
+)
 
 
 def run_meta(obj: PlanarObject, schedule: Schedule, seed: int, params: LoopParams) -> dict[str, object]:
-    """``meta.json`` of a run before it starts (the loop adds ``steps`` and ``status``)."""
-    return {
-        "object": object_meta(obj),
-        "schedule": schedule.to_dict(),
-        "seed": seed,
-        "params": {
-            "plant": params.plant,
-            "estimator_hz": params.estimator_hz,
-            "controller_hz": params.controller_hz,
-            "hand": asdict(params.hand),
-            "start": asdict(closed_loop.start_config(obj, params)),
-        },
-    }
+    """``meta.json`` of a run before it starts: its settings (:func:`ccopt.config.settings_of`) and
+    their units (the loop adds ``steps`` and ``status``)."""
+    settings = config.settings_of(obj, schedule, params, seed)
+    return {**settings, "units": config.UNITS, "record_units": RECORD_UNITS}
 
 
 def check_schedule(
@@ -192,6 +207,7 @@ def run_experiment(
     for entry, goal in zip(summary["goals"], result.goals, strict=True):
         entry["oracle"] = goal_oracle(frame, data, goal)
     summary["message"] = result.message
+    summary["units"] = SUMMARY_UNITS
     summary["impossible_steps"] = statics.impossible_steps(checks)
     summary["kinematics_resets"] = metrics.kinematics_resets(data["est_kinematics_valid"]) if data else 0
     maps = None

@@ -22,11 +22,16 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ccopt import modes
 from ccopt.geometry import wrap_angle
+
+if TYPE_CHECKING:
+    from ccopt.closed_loop import RunResult
+    from ccopt.schedule import Schedule
 
 SLIP_DISTANCE = 1e-3
 """An unintended slip moves a contact that should stick by more than this (m) within one step."""
@@ -166,23 +171,28 @@ def normal_force(data: Mapping[str, np.ndarray]) -> dict[str, float | None]:
 
 
 def summarize(
-    data: Mapping[str, np.ndarray],
-    steps: Sequence[Mapping[str, object]],
-    steps_total: int,
-    sim_time: float,
-    wall_time: float,
+    data: Mapping[str, np.ndarray] | RunResult,
+    steps: Sequence[Mapping[str, object]] | Schedule,
+    steps_total: int | None = None,
+    sim_time: float | None = None,
+    wall_time: float | None = None,
     status: str = "completed",
     goals: Sequence[Mapping[str, object]] = (),
     goals_total: int = 0,
 ) -> dict[str, object]:
     """The ``summary.json`` of a run (docs/architecture.md §8); ``status`` is how the run ended.
 
-    ``steps`` are the results of every motion (a goal's planned motions carry its index in
-    ``goal``), ``steps_total`` the number of the schedule's own motion steps, ``goals`` the goal
+    Either a run's own result and its schedule, ``summarize(result, schedule)`` (the
+    :class:`~ccopt.closed_loop.RunResult` of :func:`ccopt.closed_loop.run`, recorded or in memory), or
+    its record's arrays; ``steps``, the results of every motion (a goal's planned motions carry its
+    index in ``goal``), the per-step dicts of ``meta.json``; ``steps_total`` the number of the
+    schedule's own motion steps; the simulated and wall time (s); the status; ``goals`` the goal
     results (:meth:`ccopt.planning.sequencer.GoalResult.as_dict`) of the ``goals_total`` goal steps.
     A run that stopped before its first sample (``data`` empty) is summarised with nothing measured:
     no step done, every statistic None.
     """
+    if not isinstance(data, Mapping):
+        return summarize(*_run_inputs(data, steps))
     if len(data.get("time", ())) == 0:
         return _unmeasured(steps_total, sim_time, wall_time, status, goals_total)
     ratios = realised_ratios(data, steps)
@@ -280,6 +290,17 @@ def _unmeasured(
         "sim_time_s": float(sim_time),
         "wall_time_s": float(wall_time),
     }
+
+
+def _run_inputs(result: RunResult, schedule: Schedule) -> tuple:
+    """:func:`summarize`'s arguments of a run's result and its schedule."""
+    from ccopt.record import load_record
+
+    data = load_record(result.folder).data if result.folder is not None else result.samples
+    steps = [step.as_dict() for step in result.steps]
+    goals = [goal.as_dict() for goal in result.goals]
+    motions, goals_total = len(schedule.motions), len(schedule.goals)
+    return data, steps, motions, result.sim_time, result.wall_time, result.status, goals, goals_total
 
 
 # --- verdicts -------------------------------------------------------------------------------------

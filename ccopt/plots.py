@@ -1,10 +1,12 @@
-"""Figures of a run (paper §VII, Figs. 6–8) and a GIF of the scene, drawn from a run record.
+"""Figures of a run (paper §VII, Figs. 6–8) and a GIF of the scene (cf. Fig. 5).
 
-Every figure function is pure: it takes a :class:`~ccopt.record.Record` (or several, where the
-study aggregates trials) and returns a new :class:`~matplotlib.figure.Figure` rendered by Agg; no
-pyplot state is touched. The record is SI (rad, m, N); the plots show degrees and millimetres.
-A panel whose data are missing (an empty or interrupted record, no valid kinematics, no steps)
-says "no data" instead of raising.
+Every figure function is pure: it takes a run — a run folder, a :class:`~ccopt.record.Record`, or
+what :func:`ccopt.closed_loop.run` or :func:`ccopt.experiment.run_experiment` returned, recorded or
+in memory (:func:`ccopt.replay.as_record`) — or several, where the study pools trials, and returns
+a new :class:`~matplotlib.figure.Figure` rendered by Agg; no pyplot state is touched. Each is titled
+with the paper's figure it reproduces. The record is SI (rad, m, N); the plots show degrees and
+millimetres. A panel whose data are missing (an empty or interrupted record, no valid kinematics, no
+steps) says "no data" instead of raising.
 
 The coordinates are ``(θ_o, s_h, s_g)`` in that order, and a sample's ``motion`` code
 (``ccopt.modes.MOTION_CODES``: 0 hold, 1 pivot, 2 slide_hand, 3 slide_ground) commands
@@ -13,26 +15,27 @@ coordinate ``motion − 1``.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
-from matplotlib.animation import PillowWriter
+from matplotlib import font_manager
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
-from matplotlib.patches import Polygon
+from matplotlib.patches import Patch, Polygon
 from matplotlib.ticker import MaxNLocator
+from PIL import Image, ImageDraw, ImageFont
 
-from ccopt import geometry, metrics
-from ccopt.hand import Hand
-from ccopt.objects import PlanarObject
-from ccopt.plant.base import StartConfig
+from ccopt import geometry, metrics, replay
 from ccopt.record import Record
+from ccopt.replay import as_record, has
 
 ESTIMATE_COLOR = "tab:blue"
 TRUTH_COLOR = "black"
+TRUE_CONE_COLOR = "tab:orange"
 STICKING_COLOR = "0.65"
 SLIDING_COLOR = "tab:blue"
 COMMANDED_SHADE = "0.88"
@@ -42,7 +45,9 @@ UNITS = ("deg", "mm", "mm")
 SCALES = (float(np.rad2deg(1.0)), 1e3, 1e3)
 """Display label, unit and SI-to-display factor of each coordinate ``(θ_o, s_h, s_g)``."""
 
-Records = Record | Sequence[Record]
+Run = object
+"""A run folder, a :class:`Record`, a ``RunResult`` or an ``Experiment`` (:func:`ccopt.replay.as_record`)."""
+Runs = Run | Sequence[Run]
 
 
 # --- helpers --------------------------------------------------------------------------------------
@@ -54,13 +59,10 @@ def _figure(width: float, height: float) -> Figure:
     return fig
 
 
-def _as_list(records: Records) -> list[Record]:
-    return [records] if isinstance(records, Record) else list(records)
-
-
-def _has(record: Record, *keys: str) -> bool:
-    """True if every key is present with at least one sample."""
-    return all(key in record.data and len(record.data[key]) > 0 for key in keys)
+def _as_list(runs: Runs) -> list[Record]:
+    if isinstance(runs, Sequence) and not isinstance(runs, str):
+        return [as_record(run) for run in runs]
+    return [as_record(runs)]
 
 
 def _no_data(ax: Axes, message: str = "no data") -> None:
@@ -72,26 +74,14 @@ def _difference(a: np.ndarray, b: np.ndarray, k: int) -> np.ndarray:
     return np.asarray(geometry.wrap_angle(a - b)) if k == 0 else a - b
 
 
-def _valid(record: Record) -> np.ndarray:
-    """Samples where the estimator reports valid, finite kinematics."""
-    estimate = record.data["est_coordinates"]
-    return record.data["est_kinematics_valid"].astype(bool) & np.isfinite(estimate).all(axis=1)
-
-
 def _command_runs(record: Record) -> list[tuple[int, int, int]]:
     """``(start, stop, coordinate)`` sample ranges of each commanded (non-hold) step."""
-    if not _has(record, "motion", "step_index"):
+    if not has(record, "motion", "step_index"):
         return []
     motion, step = record.data["motion"].astype(int), record.data["step_index"].astype(int)
     change = np.flatnonzero((np.diff(motion) != 0) | (np.diff(step) != 0)) + 1
     starts, stops = np.r_[0, change], np.r_[change, len(motion)]
     return [(int(a), int(b), int(motion[a]) - 1) for a, b in zip(starts, stops, strict=True) if motion[a] > 0]
-
-
-def _last_finite(values: np.ndarray) -> np.ndarray | None:
-    """The last sample of ``values`` (first axis) whose entries are all finite, or None."""
-    finite = np.isfinite(values.reshape(len(values), -1)).all(axis=1)
-    return values[np.flatnonzero(finite)[-1]] if finite.any() else None
 
 
 def _limits(points: np.ndarray, pad: float = 0.15) -> tuple[tuple[float, float], tuple[float, float]]:
@@ -107,16 +97,32 @@ def _label_coordinates(axes: Sequence[Axes], what: str) -> None:
     axes[-1].set_xlabel("time (s)")
 
 
+def _name(record: Record) -> str:
+    """The object and schedule of a run, for a title ("" if the run did not record them)."""
+    obj, schedule = record.meta.get("object"), record.meta.get("schedule")
+    parts = [
+        obj.get("name") if isinstance(obj, dict) else None,
+        f"schedule {schedule.get('name')}" if isinstance(schedule, dict) else None,
+    ]
+    return ", ".join(str(p) for p in parts if p)
+
+
+def _title(fig: Figure, text: str, record: Record | None = None) -> None:
+    """``text`` as the figure's title, the run's object and schedule on a second line."""
+    name = _name(record) if record is not None else ""
+    fig.suptitle(f"{text}\n{name}" if name else text)
+
+
 # --- Fig. 6: estimation ---------------------------------------------------------------------------
 
 
 def _draw_traces(axes: Sequence[Axes], record: Record) -> None:
     _label_coordinates(axes, "")
-    if not _has(record, "time", "est_coordinates", "true_coordinates", "est_kinematics_valid"):
+    if not has(record, "time", "est_coordinates", "true_coordinates", "est_kinematics_valid"):
         for ax in axes:
             _no_data(ax)
         return
-    time, valid = record.data["time"], _valid(record)
+    time, valid = record.data["time"], replay.valid(record)
     for start, stop, k in _command_runs(record):
         axes[k].axvspan(time[start], time[min(stop, len(time) - 1)], color=COMMANDED_SHADE, lw=0)
     for k, ax in enumerate(axes):
@@ -129,22 +135,23 @@ def _draw_traces(axes: Sequence[Axes], record: Record) -> None:
     axes[0].legend(loc="best", fontsize="small")
 
 
-def estimation_traces(record: Record) -> Figure:
+def estimation_traces(run: Run) -> Figure:
     """Fig. 6a: estimated (blue) and true (black) ``θ_o`` (deg), ``s_h`` and ``s_g`` (mm) over time
     (s), the estimate only where the kinematics are valid; grey where that coordinate was commanded.
     """
+    record = as_record(run)
     fig = _figure(7.0, 5.5)
     axes = fig.subplots(3, 1, sharex=True)
     _draw_traces(axes, record)
-    fig.suptitle("Estimated vs true contact configuration")
+    _title(fig, "Fig. 6a: estimated (blue) vs true (black) contact configuration", record)
     return fig
 
 
 def _abs_errors(record: Record, k: int) -> np.ndarray:
     """|estimate − truth| of coordinate ``k`` where the kinematics are valid, in deg or mm."""
-    if not _has(record, "est_coordinates", "true_coordinates", "est_kinematics_valid"):
+    if not has(record, "est_coordinates", "true_coordinates", "est_kinematics_valid"):
         return np.empty(0)
-    valid = _valid(record)
+    valid = replay.valid(record)
     estimate, true = record.data["est_coordinates"][valid, k], record.data["true_coordinates"][valid, k]
     return np.abs(_difference(estimate, true, k)) * SCALES[k]
 
@@ -160,28 +167,31 @@ def _draw_boxes(axes: Sequence[Axes], records: list[Record]) -> None:
         ax.set_xticks([])
 
 
-def estimation_error_boxes(records: Records) -> Figure:
+def estimation_error_boxes(runs: Runs) -> Figure:
     """Fig. 6b: box plots of the absolute estimation error of ``θ_o`` (deg), ``s_h`` and ``s_g`` (mm)
-    over the samples with valid kinematics, pooled over ``records``; median blue, whiskers 1.5 × IQR,
+    over the samples with valid kinematics, pooled over ``runs``; median blue, whiskers 1.5 × IQR,
     outliers hidden.
     """
-    records = _as_list(records)
-    fig = _figure(6.0, 3.0)
+    records = _as_list(runs)
+    fig = _figure(6.0, 3.2)
     _draw_boxes(fig.subplots(1, 3), records)
-    fig.suptitle(f"Absolute estimation error ({len(records)} run{'s' * (len(records) != 1)})")
+    count = f"{len(records)} run{'s' * (len(records) != 1)}"
+    _title(fig, f"Fig. 6b: absolute estimation error ({count})")
     return fig
 
 
-def estimation_figure(record: Record) -> Figure:
+def estimation_figure(run: Run) -> Figure:
     """Fig. 6 for one run: the traces (left) and the error box plots (right, one per coordinate)."""
+    record = as_record(run)
     fig = _figure(9.0, 6.0)
     axes = fig.subplots(3, 2, width_ratios=(4, 1))
     for ax in axes[:2, 0]:
         ax.sharex(axes[2, 0])
     _draw_traces(axes[:, 0], record)
     _draw_boxes(axes[:, 1], [record])
-    axes[0, 0].set_title("estimation (grey: commanded)")
+    axes[0, 0].set_title("estimated (blue) vs true (black); grey: commanded")
     axes[0, 1].set_title("|error|")
+    _title(fig, "Fig. 6: estimation", record)
     return fig
 
 
@@ -193,20 +203,50 @@ def _scatter_by_mode(ax: Axes, points: np.ndarray, sliding: np.ndarray) -> None:
     ax.scatter(*points[sliding].T, s=4, color=SLIDING_COLOR, lw=0, label="sliding (true)")
 
 
-def _draw_hand_cone(ax: Axes, record: Record) -> None:
+def _estimate_index(record: Record, at: float | None) -> int | None:
+    """The sample whose estimate the cone figure draws: the last with a finite ``μ̂_h`` or ground cone
+    at or before ``at`` (s; None: the run's end), or None if there is none."""
+    if not has(record, "time"):
+        return None
+    finite = np.zeros(len(record.data["time"]), dtype=bool)
+    if "est_mu_h" in record.data:
+        finite |= np.isfinite(record.data["est_mu_h"])
+    if has(record, "est_ground_rows", "est_ground_bounds"):
+        rows, bounds = record.data["est_ground_rows"], record.data["est_ground_bounds"]
+        finite |= np.isfinite(rows).all(axis=(1, 2)) & np.isfinite(bounds).all(axis=1)
+    if at is not None:
+        finite &= record.data["time"] <= at
+    return int(np.flatnonzero(finite)[-1]) if finite.any() else None
+
+
+def _cone_line(ax: Axes, xy: np.ndarray, color: str, style: str, label: str, gid: str) -> None:
+    ax.plot(*xy.T, color=color, lw=1.4, ls=style, label=label, gid=gid)
+
+
+def _draw_hand_cone(ax: Axes, record: Record, index: int | None) -> None:
     ax.set(xlabel=r"$f_n$ (N)", ylabel=r"$f_t$ (N)", title="hand")
-    if not _has(record, "hand_wrench", "true_modes", "true_contacts"):
+    if not has(record, "hand_wrench", "true_modes", "true_contacts"):
         _no_data(ax)
         return
     wrench = record.data["hand_wrench"]
     touching = record.data["true_contacts"][:, 0].astype(bool) & np.isfinite(wrench[:, :2]).all(axis=1)
     points = wrench[touching, :2]
     _scatter_by_mode(ax, points, record.data["true_modes"][touching, 0] != 0)
-    mu = _last_finite(record.data["est_mu_h"]) if "est_mu_h" in record.data else None
-    if mu is not None:
-        f_n = np.array([0.0, 1.1 * max(float(points[:, 0].max(initial=0.0)), 1.0)])
-        ax.plot(f_n, mu * f_n, color=TRUTH_COLOR, lw=1.2, label=rf"estimated $\mu_h$ = {float(mu):.2f}")
-        ax.plot(f_n, -mu * f_n, color=TRUTH_COLOR, lw=1.2)
+    f_n = np.array([0.0, 1.1 * max(float(points[:, 0].max(initial=0.0)), 1.0)])
+    mu = record.data["est_mu_h"][index] if index is not None and "est_mu_h" in record.data else np.nan
+    if np.isfinite(mu):
+        label = rf"estimated $\hat\mu_h$ = {float(mu):.2f}"
+        for sign in (1.0, -1.0):
+            _cone_line(ax, np.column_stack((f_n, sign * mu * f_n)), TRUTH_COLOR, "-", label, "estimated")
+            label = "_"
+    obj = replay.true_object(record)
+    if obj is not None:
+        label = rf"true $\mu_h$ = {obj.mu_hand:.2f}"
+        for sign in (1.0, -1.0):
+            _cone_line(
+                ax, np.column_stack((f_n, sign * obj.mu_hand * f_n)), TRUE_CONE_COLOR, "--", label, "true"
+            )
+            label = "_"
     if len(points) == 0:
         _no_data(ax)
     ax.legend(loc="best", fontsize="small")
@@ -214,17 +254,17 @@ def _draw_hand_cone(ax: Axes, record: Record) -> None:
 
 def _world_forces(record: Record) -> np.ndarray:
     """Measured hand force in the world frame ``(f_x, f_y)``, N, one row a sample."""
-    pose, wrench = record.data["hand_pose"], record.data["hand_wrench"]
-    forces = [geometry.wrench_hand_to_world(p[2], w)[:2] for p, w in zip(pose, wrench, strict=True)]
-    return np.reshape(forces, (-1, 2))
+    theta, (f_n, f_t) = record.data["hand_pose"][:, 2], record.data["hand_wrench"][:, :2].T
+    sin, cos = np.sin(theta), np.cos(theta)
+    return np.column_stack((f_n * sin + f_t * cos, -f_n * cos + f_t * sin))
 
 
-def _draw_boundary(ax: Axes, rows: np.ndarray, bounds: np.ndarray, limits: tuple) -> None:
-    """The boundary of ``{f : A f ≤ b}``: each row's line ``a·f = b`` where the other rows hold,
-    long enough to cross the (then fixed) ``limits``.
-    """
+def _boundary(rows: np.ndarray, bounds: np.ndarray, limits: tuple) -> list[np.ndarray]:
+    """The boundary of ``{f : A f ≤ b}``: each row's segment of ``a·f = b`` where the other rows hold,
+    long enough to cross ``limits``."""
     (x0, x1), (y0, y1) = limits
     centre, reach = np.array([x0 + x1, y0 + y1]) / 2, np.hypot(x1 - x0, y1 - y0)
+    segments = []
     for i, (a, b) in enumerate(zip(rows, bounds, strict=True)):
         norm = np.linalg.norm(a)
         if norm == 0.0:
@@ -241,14 +281,25 @@ def _draw_boundary(ax: Axes, rows: np.ndarray, bounds: np.ndarray, limits: tuple
             elif room < 0.0:
                 high = low
         if low < high:
-            ends = foot + np.outer([low, high], along)
-            ax.plot(*ends.T, color=TRUTH_COLOR, lw=1.2, label="_" if ax.get_lines() else "estimated")
-    ax.set(xlim=(x0, x1), ylim=(y0, y1))
+            segments.append(foot + np.outer([low, high], along))
+    return segments
 
 
-def _draw_ground_cone(ax: Axes, record: Record) -> None:
+def true_ground_rows(record: Record) -> tuple[np.ndarray, np.ndarray] | None:
+    """The true ground cone on the world hand force, ``A f ≤ b`` (N): with the object at rest the
+    ground pushes back ``(−f_x, m g − f_y)``, which slides once ``|f_x| > μ_g (m g − f_y)``; None
+    without the object in ``meta.json``."""
+    obj = replay.true_object(record)
+    if obj is None:
+        return None
+    weight = obj.mass * geometry.GRAVITY
+    rows = np.array([[1.0, obj.mu_ground], [-1.0, obj.mu_ground]])
+    return rows, np.full(2, obj.mu_ground * weight)
+
+
+def _draw_ground_cone(ax: Axes, record: Record, index: int | None) -> None:
     ax.set(xlabel=r"hand force $f_x$ (N)", ylabel=r"hand force $f_y$ (N)", title="ground")
-    if not _has(record, "hand_pose", "hand_wrench", "true_modes", "true_contacts"):
+    if not has(record, "hand_pose", "hand_wrench", "true_modes", "true_contacts"):
         _no_data(ax)
         return
     forces = _world_forces(record)
@@ -258,19 +309,19 @@ def _draw_ground_cone(ax: Axes, record: Record) -> None:
         _no_data(ax)
         return
     _scatter_by_mode(ax, points, record.data["true_modes"][touching, 2] != 0)
-    final = _final_ground_rows(record)
-    if final is not None:
-        _draw_boundary(ax, *final, _limits(np.vstack((points, [0.0, 0.0], *_corner(*final, points)))))
+    estimate = None
+    if index is not None and has(record, "est_ground_rows", "est_ground_bounds"):
+        rows, bounds = record.data["est_ground_rows"][index], record.data["est_ground_bounds"][index]
+        estimate = (rows, bounds) if np.isfinite(rows).all() and np.isfinite(bounds).all() else None
+    limits = _limits(np.vstack((points, [0.0, 0.0], *(_corner(*estimate, points) if estimate else []))))
+    cones = ((estimate, TRUTH_COLOR, "-", "estimated", "estimated"),)
+    cones += ((true_ground_rows(record), TRUE_CONE_COLOR, "--", "true", "true"),)
+    for cone, color, style, label, gid in cones:
+        if cone is not None:
+            for k, segment in enumerate(_boundary(*cone, limits)):
+                _cone_line(ax, segment, color, style, label if k == 0 else "_", gid)
+    ax.set(xlim=limits[0], ylim=limits[1])
     ax.legend(loc="best", fontsize="small")
-
-
-def _final_ground_rows(record: Record) -> tuple[np.ndarray, np.ndarray] | None:
-    """The last finite estimate of the ground rows ``(A (2×2), b (2))``, or None."""
-    if not _has(record, "est_ground_rows", "est_ground_bounds"):
-        return None
-    rows, bounds = record.data["est_ground_rows"], record.data["est_ground_bounds"]
-    finite = np.flatnonzero(np.isfinite(rows).all(axis=(1, 2)) & np.isfinite(bounds).all(axis=1))
-    return (rows[finite[-1]], bounds[finite[-1]]) if finite.size else None
 
 
 def _corner(rows: np.ndarray, bounds: np.ndarray, points: np.ndarray) -> list[np.ndarray]:
@@ -284,17 +335,26 @@ def _corner(rows: np.ndarray, bounds: np.ndarray, points: np.ndarray) -> list[np
     return [apex] if np.linalg.norm(apex - centre) <= 3.0 * extent else []
 
 
-def friction_cones(record: Record) -> Figure:
+def friction_cones(run: Run, at: float | None = None) -> Figure:
     """Fig. 7: measured wrenches, grey where the contact truly sticks and blue where it truly slides,
-    with the final estimated cone boundaries (black). Left: the hand, ``f_t`` against ``f_n`` (N),
-    lines ``f_t = ±μ_h f_n``. Right: the world hand force ``(f_x, f_y)`` (N) and the boundary of the
-    estimated ground constraint ``A f ≤ b``. Only samples with the contacts truly closed are shown.
+    the estimated cone boundaries (black) at one instant and the true ones (orange, dashed). Left: the
+    hand, ``f_t`` against ``f_n`` (N), lines ``f_t = ±μ_h f_n``. Right: the world hand force
+    ``(f_x, f_y)`` (N), the boundary of the estimated ground constraint ``A f ≤ b`` and of the true
+    one (:func:`true_ground_rows`). Only samples with the contacts truly closed are shown. The
+    estimate drawn is the last one at or before ``at`` (s; None: the run's end); the title says when.
     """
-    fig = _figure(8.0, 3.8)
+    record = as_record(run)
+    fig = _figure(8.5, 4.0)
     hand, ground = fig.subplots(1, 2)
-    _draw_hand_cone(hand, record)
-    _draw_ground_cone(ground, record)
-    fig.suptitle("Estimated friction cones and measured wrenches")
+    index = _estimate_index(record, at)
+    _draw_hand_cone(hand, record, index)
+    _draw_ground_cone(ground, record, index)
+    if index is None:
+        when = "no estimate"
+    else:
+        last = " (the run's last)" if at is None else ""
+        when = f"estimate at t = {record.data['time'][index]:.2f} s{last}"
+    _title(fig, f"Fig. 7: friction cones, estimated (black) vs true (orange, dashed)\n{when}", record)
     return fig
 
 
@@ -303,7 +363,7 @@ def friction_cones(record: Record) -> Figure:
 
 def _draw_control_errors(axes: Sequence[Axes], record: Record) -> None:
     _label_coordinates(axes, " error")
-    runs = _command_runs(record) if _has(record, "time", "command_targets", "true_coordinates") else []
+    runs = _command_runs(record) if has(record, "time", "command_targets", "true_coordinates") else []
     for start, stop, k in runs:
         command = record.data["command_targets"][start:stop, k]
         error = _difference(command, record.data["true_coordinates"][start:stop, k], k) * SCALES[k]
@@ -316,13 +376,14 @@ def _draw_control_errors(axes: Sequence[Axes], record: Record) -> None:
             _no_data(ax)
 
 
-def control_errors(record: Record) -> Figure:
+def control_errors(run: Run) -> Figure:
     """Fig. 8a: commanded − true value of the commanded coordinate, ``θ_o`` (deg), ``s_h`` and ``s_g``
     (mm), over time (s) during each step that commands it (one line per step).
     """
+    record = as_record(run)
     fig = _figure(7.0, 5.5)
     _draw_control_errors(fig.subplots(3, 1, sharex=True), record)
-    fig.suptitle("Control error during commanded motions")
+    _title(fig, "Fig. 8a: control error (commanded − true) during commanded motions", record)
     return fig
 
 
@@ -331,7 +392,7 @@ def _ratios(records: list[Record]) -> np.ndarray:
     parts = [
         metrics.realised_ratios(record.data, record.meta.get("steps", []))
         for record in records
-        if _has(record, "time", "true_coordinates")
+        if has(record, "time", "true_coordinates")
     ]
     ratios = np.concatenate([np.empty(0), *parts])
     return ratios[np.isfinite(ratios)]
@@ -355,186 +416,234 @@ def _draw_histogram(ax: Axes, records: list[Record]) -> None:
     ax.axvline(1.0, color=ESTIMATE_COLOR, ls="--", lw=1.5)
 
 
-def realised_histogram(records: Records) -> Figure:
+def realised_histogram(runs: Runs) -> Figure:
     """Fig. 8b: histogram of the true change of the commanded coordinate over each step, divided by
-    the commanded change, pooled over ``records``; dashed line at 1 (fully realised).
+    the commanded change, pooled over ``runs``; dashed line at 1 (fully realised).
     """
-    records = _as_list(records)
+    records = _as_list(runs)
     fig = _figure(4.5, 3.5)
     _draw_histogram(fig.add_subplot(), records)
-    fig.suptitle(f"Realised change ({len(records)} run{'s' * (len(records) != 1)})")
+    count = f"{len(records)} run{'s' * (len(records) != 1)}"
+    _title(fig, f"Fig. 8b: realised / commanded change ({count})")
     return fig
 
 
-def control_figure(record: Record) -> Figure:
+def control_figure(run: Run) -> Figure:
     """Fig. 8 for one run: the control errors (left) and the histogram of realised change (right)."""
+    record = as_record(run)
     fig = _figure(10.0, 5.5)
     left, right = fig.subfigures(1, 2, width_ratios=(3, 2))
     _draw_control_errors(left.subplots(3, 1, sharex=True), record)
     _draw_histogram(right.add_subplot(), [record])
-    left.suptitle("commanded − true")
+    left.suptitle("commanded − true (each commanded step)")
     right.suptitle("realised / commanded")
+    _title(fig, "Fig. 8: control", record)
     return fig
 
 
 # --- animation ------------------------------------------------------------------------------------
 
-
-def _object(record: Record) -> tuple[np.ndarray, float] | None:
-    """Body-frame vertices (m) of the object of ``meta`` and the angle (rad) to add to the angle of its
-    hand face to get the object angle; None if the object or the face is unknown or invalid.
-    """
-    spec = record.meta.get("object")
-    start = record.meta.get("params", {}).get("start", {})
-    try:
-        obj = PlanarObject(spec["name"], spec["vertices"], spec["mass"], spec["mu_hand"], spec["mu_ground"])
-        face = start.get("hand_face", StartConfig().hand_face)
-        return obj.vertices, -geometry.face_angle(obj.face_normal(face), 0.0)
-    except (KeyError, TypeError, ValueError):
-        return None
-
-
-def _polygon(vertices: np.ndarray, offset: float, theta_o: float, r_o: np.ndarray) -> np.ndarray:
-    """World vertices of the object at angle ``θ_o + offset`` whose lowest vertex is at ``r_o`` (m)."""
-    turned = geometry.transform_points(vertices, (0.0, 0.0, theta_o + offset))
-    return turned - turned[geometry.lowest_vertex(turned)] + r_o
-
-
-def _upward(row: np.ndarray) -> np.ndarray:
-    """The direction along the line ``a·f = b`` of a ground row ``a`` that points up (+y)."""
-    along = np.array([-row[1], row[0]])
-    return along if along[1] >= 0.0 else -along
-
-
-def _wedge(apex: np.ndarray, directions: Sequence[np.ndarray], length: float) -> np.ndarray:
-    """Polygon of ``apex`` and ``apex + length·u`` for the unit vector ``u`` of each direction."""
-    return np.vstack([apex, *(apex + length * u / np.linalg.norm(u) for u in directions)])
-
-
-SCENE_KEYS = (
-    "time",
-    "hand_pose",
-    "true_hand_pose",
-    "true_coordinates",
-    "true_d",
-    "est_coordinates",
-    "est_d",
-    "est_kinematics_valid",
-    "est_mu_h",
-    "est_ground_rows",
-)
-"""Series the animation needs."""
-
-
-def _half_length(record: Record) -> float:
-    """The hand's ``l_h`` (m) of a run's ``meta.json`` (the default hand's if the run did not say)."""
-    params = record.meta.get("params", {})
-    hand = params.get("hand", {}) if isinstance(params, dict) else {}
-    value = hand.get("half_length") if isinstance(hand, dict) else None
-    return float(value) if isinstance(value, int | float) else Hand().half_length
-
-
-def _scene(record: Record, frames: np.ndarray) -> list[dict[str, np.ndarray | None]]:
-    """Per frame, in m: the object polygon (true), hand segment (true), true and estimated ``r_o``,
-    the estimated hand cone at the measured hand and the estimated ground cone at the estimated ``r_o``
-    (None where unknown).
-    """
-    data = record.data
-    l_h = _half_length(record)
-    true_pose, pose = data["true_hand_pose"][frames], data["hand_pose"][frames]
-    r_o = geometry.ground_contact(true_pose, data["true_coordinates"][frames, 1], data["true_d"][frames])
-    r_est = geometry.ground_contact(pose, data["est_coordinates"][frames, 1], data["est_d"][frames])
-    valid = _valid(record)[frames]
-    known = _object(record)
-    scene = []
-    for j, i in enumerate(frames):
-        mu, rows = data["est_mu_h"][i], data["est_ground_rows"][i]
-        e_t, e_n = geometry.hand_tangent(pose[j, 2]), geometry.hand_normal(pose[j, 2])
-        hand_cone = _wedge(pose[j, :2], (e_n + mu * e_t, e_n - mu * e_t), l_h) if np.isfinite(mu) else None
-        ground_ok = valid[j] and np.isfinite(rows).all()
-        scene.append(
-            {
-                "object": _polygon(*known, data["true_coordinates"][i, 0], r_o[j]) if known else None,
-                "hand": true_pose[j, :2] + np.outer([-l_h, l_h], geometry.hand_tangent(true_pose[j, 2])),
-                "r_o": r_o[j],
-                "r_o_est": r_est[j] if valid[j] else None,
-                "hand_cone": hand_cone,
-                "ground_cone": _wedge(r_est[j], [_upward(a) for a in rows], l_h) if ground_ok else None,
-            }
-        )
-    return scene
-
-
 MM = 1e3
 """Metres to millimetres, the unit of the animation's axes."""
+GIF_SIZE = (8.0, 5.0)
+GIF_DPI = 80
+"""The GIF's figure size (in) and resolution: 640 × 400 pixels."""
+FRAME_S = 0.1
+"""How long each GIF frame shows, s of playback (10 frames a second)."""
+NICE_SPEEDS = (1, 2, 3, 5, 10, 20, 30, 50, 100)
+"""Playback speeds (× simulated time) the GIF chooses from."""
 
 
-def _fix_view(ax: Axes, scene: list[dict[str, np.ndarray | None]]) -> None:
-    """Fixed limits (mm) holding every frame's geometry and the ground line ``y = 0``."""
-    points = np.vstack([np.reshape(v, (-1, 2)) for frame in scene for v in frame.values() if v is not None])
-    points = MM * points[np.isfinite(points).all(axis=1)]
-    xlim, ylim = _limits(np.vstack((points, [points[0, 0], 0.0])), pad=0.1)
-    ax.set(xlim=xlim, ylim=ylim, xlabel="x (mm)", ylabel="y (mm)")
-    ax.set_aspect("equal", adjustable="box")
+def playback(duration: float, max_frames: int) -> tuple[float, int]:
+    """``(speed, frames)``: the smallest of :data:`NICE_SPEEDS` (× simulated time) at which a run of
+    ``duration`` s plays in at most ``max_frames`` frames of :data:`FRAME_S`, and the frames it takes."""
+    needed = duration / (max_frames * FRAME_S)
+    speed = next((s for s in NICE_SPEEDS if s >= needed), math.ceil(needed))
+    return float(speed), max(1, math.floor(duration / (speed * FRAME_S) + 1e-9) + 1)
 
 
-def _show_patch(patch: Polygon, xy: np.ndarray | None) -> None:
-    patch.set_visible(xy is not None)
-    if xy is not None:
-        patch.set_xy(MM * xy)
+def _view(
+    scene: list[replay.Frame], l_h: float, aspect: float
+) -> tuple[tuple[float, float], tuple[float, float]]:
+    """Fixed limits (mm) on the object: every frame's object polygon (the hand's path where the object
+    is unknown) with room for the hand and the cones around it, the ground line in view, widened to
+    the ``aspect`` (width / height) of the axes."""
+    shapes = [frame.object for frame in scene if frame.object is not None]
+    points = np.vstack(shapes or [np.vstack((frame.hand, frame.r_o)) for frame in scene])
+    low, high = points.min(axis=0), points.max(axis=0)
+    room = max(2.0 * l_h + 0.01, 0.15 * float(np.max(high - low)))  # the cones are 2 l_h long
+    low, high = low - room, high + room
+    low[1] = min(low[1] + 0.7 * room, -0.3 * room)  # a strip of ground
+    centre, half = (low + high) / 2, (high - low) / 2
+    half = np.maximum(half, half[::-1] * np.array([aspect, 1.0 / aspect]))
+    centre[1] = low[1] + half[1]  # room added above: the ground stays near the bottom
+    return tuple(MM * (centre[0] + np.array([-1, 1]) * half[0])), tuple(
+        MM * (centre[1] + np.array([-1, 1]) * half[1])
+    )
 
 
-def _show_line(line: Line2D, xy: np.ndarray | None) -> None:
-    points = np.empty((0, 2)) if xy is None else MM * np.reshape(xy, (-1, 2))
-    line.set_data(points[:, 0], points[:, 1])
+ARTISTS = (
+    ("object", "true object"),
+    ("hand", "true hand"),
+    ("chain", "true contact geometry (r_o, d, s_h)"),
+    ("chain_est", "estimated contact geometry"),
+    ("r_o", "true ground contact r_o"),
+    ("r_o_est", "estimated ground contact"),
+    ("hand_cone", "estimated hand cone"),
+    ("hand_cone_true", "true hand cone"),
+    ("ground_cone", "estimated ground cone"),
+    ("ground_cone_true", "true ground cone"),
+    ("force", "measured hand force (3 mm/N)"),
+)
+"""What the GIF draws, in the legend's words (a :class:`~ccopt.replay.Frame` field each)."""
+FORCE_SCALE = 3e-3
+"""Metres drawn per newton of hand force."""
 
 
-def animation(record: Record, path: str | Path, fps: int = 20, max_frames: int = 200) -> Path:
-    """Write a GIF of the run to ``path`` and return it: the true object and hand, the ground, the true
-    (black ×) and estimated (blue ○, where the kinematics are valid) ground contact ``r_o``, the
-    estimated hand friction cone at the measured hand and the estimated ground cone (the directions
-    of the ground rows' lines, pointing up) at the estimated ``r_o``; axes in mm. At most
-    ``max_frames`` evenly spaced samples are shown, ``fps`` a second. An empty record gives one
-    "no data" frame.
+def _artists(ax: Axes) -> dict[str, object]:
+    """One animated artist per :data:`ARTISTS` entry, styled, empty."""
+    empty = np.zeros((3, 2))
+    cone = {"closed": False, "lw": 1.5}
+    artists = {
+        "object": Polygon(empty, closed=True, fc="0.85", ec="0.3", lw=1.2),
+        "hand": Line2D([], [], color="0.15", lw=5, solid_capstyle="butt"),
+        "chain": Line2D([], [], color=TRUTH_COLOR, lw=1.0, ls=":"),
+        "chain_est": Line2D([], [], color=ESTIMATE_COLOR, lw=1.0, ls=":"),
+        "r_o": Line2D([], [], marker="x", ls="none", color=TRUTH_COLOR, ms=10, mew=2),
+        "r_o_est": Line2D([], [], marker="o", ls="none", mfc="none", color=ESTIMATE_COLOR, ms=10, mew=1.5),
+        "hand_cone": Polygon(empty, fc=ESTIMATE_COLOR, ec=ESTIMATE_COLOR, alpha=0.3),
+        "hand_cone_true": Polygon(empty, fill=False, ec=TRUE_CONE_COLOR, ls="--", **cone),
+        "ground_cone": Polygon(empty, fc="tab:purple", ec="tab:purple", alpha=0.3),
+        "ground_cone_true": Polygon(empty, fill=False, ec="tab:red", ls="--", **cone),
+        "force": Line2D([], [], color="tab:green", lw=2.0, marker=">", markevery=[-1]),
+    }
+    for artist in artists.values():
+        if isinstance(artist, Polygon):
+            ax.add_patch(artist)
+        else:
+            ax.add_line(artist)
+        artist.set_animated(True)
+    return artists
+
+
+def _legend(ax: Axes, artists: dict[str, object]) -> None:
+    """A legend entry for every element (ground included), proxies styled as the artists."""
+    handles = [Line2D([], [], color="0.3", lw=2, label="ground")]
+    for key, label in ARTISTS:
+        artist = artists[key]
+        if isinstance(artist, Polygon):
+            proxy = Patch(
+                fc=artist.get_facecolor(),
+                ec=artist.get_edgecolor(),
+                ls=artist.get_linestyle(),
+                fill=artist.get_fill(),
+                label=label,
+            )
+        else:
+            proxy = Line2D(
+                [],
+                [],
+                color=artist.get_color(),
+                lw=min(artist.get_linewidth(), 3),
+                ls=artist.get_linestyle(),
+                marker=artist.get_marker(),
+                mfc=artist.get_markerfacecolor(),
+                label=label,
+            )
+        handles.append(proxy)
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=9, frameon=False)
+
+
+def _show(artist: object, xy: np.ndarray | None) -> None:
+    artist.set_visible(xy is not None)
+    if xy is None:
+        return
+    points = MM * np.reshape(xy, (-1, 2))
+    if isinstance(artist, Polygon):
+        artist.set_xy(points)
+    else:
+        artist.set_data(points[:, 0], points[:, 1])
+
+
+def _frame_geometry(frame: replay.Frame) -> dict[str, np.ndarray | None]:
+    """The points of each artist in one frame, m."""
+    force = None
+    if frame.force is not None:
+        force = np.vstack((frame.hand.mean(axis=0), frame.hand.mean(axis=0) + FORCE_SCALE * frame.force))
+    return {key: (force if key == "force" else getattr(frame, key)) for key, _ in ARTISTS}
+
+
+def animation(run: Run, path: str | Path, max_frames: int = 120) -> Path:
+    """Write a GIF of the run to ``path`` (640 × 400 px) and return it (cf. the paper's Fig. 5). The
+    true object and hand, the ground, the true (black) and estimated (blue) ground contact and contact
+    geometry, the estimated hand (blue) and ground (purple) friction cones and the true ones (dashed),
+    and the measured hand force, in mm, in a frame fixed on the object (the hand may leave it). Frames
+    are :data:`FRAME_S` of playback apart and play at a constant multiple of simulated time
+    (:func:`playback`: at most ``max_frames``), drawn by blitting the moving parts over one rendered
+    background. An empty record gives one "no data" frame.
     """
+    record = as_record(run)
     path = Path(path)
-    fig = _figure(4.0, 3.4)
-    ax = fig.add_subplot()
-    writer = PillowWriter(fps=fps)
-    n = len(record.data["time"]) if _has(record, *SCENE_KEYS) else 0
+    fig = Figure(figsize=GIF_SIZE, dpi=GIF_DPI)
+    canvas = FigureCanvasAgg(fig)
+    box = (0.08, 0.11, 0.58, 0.78)
+    ax = fig.add_axes(box)
+    n = len(record.data["time"]) if has(record, *replay.SCENE_KEYS) else 0
     if n == 0:
         _no_data(ax)
-        with writer.saving(fig, str(path), dpi=80):
-            writer.grab_frame()
+        canvas.draw()
+        _save_gif(path, [_rgb(canvas)], FRAME_S)
         return path
-    frames = np.unique(np.linspace(0, n - 1, min(n, max_frames)).round().astype(int))
-    scene = _scene(record, frames)
-    _fix_view(ax, scene)
-    ax.axhline(0.0, color="0.3", lw=1.5)
-    body = ax.add_patch(Polygon(np.zeros((3, 2)), fc="0.85", ec="0.3"))
-    cones = {
-        key: ax.add_patch(Polygon(np.zeros((3, 2)), fc=ESTIMATE_COLOR, ec=ESTIMATE_COLOR, alpha=0.3))
-        for key in ("hand_cone", "ground_cone")
-    }
-    lines = {
-        "hand": ax.plot([], [], color="0.15", lw=4, solid_capstyle="butt")[0],
-        "r_o": ax.plot([], [], "x", color=TRUTH_COLOR, ms=8, mew=2, label="true $r_o$")[0],
-        "r_o_est": ax.plot([], [], "o", mfc="none", color=ESTIMATE_COLOR, ms=8, label="estimated $r_o$")[0],
-    }
-    ax.legend(loc="upper right", fontsize="x-small")
-    clock = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize="small")
-    fig.canvas.draw()  # lay out once: the limits are fixed, so the layout is too
-    fig.set_layout_engine("none")
-    with writer.saving(fig, str(path), dpi=80):
-        for i, frame in zip(frames, scene, strict=True):
-            _show_patch(body, frame["object"])
-            for key, patch in cones.items():
-                _show_patch(patch, frame[key])
-            for key, line in lines.items():
-                _show_line(line, frame[key])
-            clock.set_text(f"t = {record.data['time'][i]:.2f} s")
-            writer.grab_frame()
+    time = record.data["time"]
+    speed, count = playback(float(time[-1] - time[0]), max_frames)
+    moments = time[0] + speed * FRAME_S * np.arange(count)
+    frames = np.clip(np.searchsorted(time, moments + 1e-9, side="right") - 1, 0, n - 1)
+    scene = replay.scene(record, frames)
+    xlim, ylim = _view(scene, replay.half_length(record), box[2] * GIF_SIZE[0] / (box[3] * GIF_SIZE[1]))
+    ax.set(xlim=xlim, ylim=ylim, xlabel="x (mm)", ylabel="y (mm)")
+    ax.set_aspect("equal", adjustable="box")
+    ax.axhline(0.0, color="0.3", lw=2)
+    ax.axhspan(ylim[0], 0.0, color="0.93", lw=0)
+    artists = _artists(ax)
+    _legend(ax, artists)
+    name = _name(record)
+    fig.suptitle(f"cf. Fig. 5: a contact configuration sequence{' — ' + name if name else ''}", fontsize=12)
+    canvas.draw()
+    background = canvas.copy_from_bbox(fig.bbox)
+    corner = ax.transAxes.transform((0.02, 0.97))
+    clock = (round(corner[0]), round(fig.bbox.height - corner[1]))  # PIL counts rows from the top
+    font = ImageFont.truetype(font_manager.findfont("DejaVu Sans"), 14)
+    images = []
+    for moment, frame in zip(moments, scene, strict=True):
+        canvas.restore_region(background)
+        for key, xy in _frame_geometry(frame).items():
+            _show(artists[key], xy)
+            ax.draw_artist(artists[key])
+        image = _rgb(canvas)
+        text = f"t = {moment - time[0]:.1f} s   (playback {speed:g}× simulated time)"
+        ImageDraw.Draw(image).text(clock, text, fill="black", font=font)
+        images.append(image)
+    _save_gif(path, images, FRAME_S)
     return path
+
+
+def _rgb(canvas: FigureCanvasAgg) -> Image.Image:
+    """The canvas as it is now, an RGB image (the clock is written on it by PIL: a text drawn by
+    Matplotlib costs more than the rest of a frame)."""
+    width, height = canvas.get_width_height()
+    return Image.frombuffer("RGBA", (width, height), canvas.buffer_rgba(), "raw", "RGBA", 0, 1).convert("RGB")
+
+
+def _save_gif(path: Path, images: list[Image.Image], frame_s: float) -> None:
+    """Write ``images`` as a looping GIF, ``frame_s`` s each, in one palette made from the first, the
+    middle and the last frame (no dither: flat colours stay flat)."""
+    sample = [images[0], images[len(images) // 2], images[-1]]
+    mosaic = Image.new("RGB", (sample[0].width, sample[0].height * len(sample)))
+    for k, image in enumerate(sample):
+        mosaic.paste(image, (0, k * image.height))
+    palette = mosaic.quantize(colors=255, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
+    frames = [image.quantize(palette=palette, dither=Image.Dither.NONE) for image in images]
+    frames[0].save(path, save_all=True, append_images=frames[1:], duration=round(1000 * frame_s), loop=0)
 
 
 # --- all figures of a run -------------------------------------------------------------------------
@@ -547,10 +656,10 @@ FIGURES = {
 """The still figures of a run folder and the functions that draw them."""
 
 
-def write_figures(record: Record, folder: str | Path, dpi: int = 120) -> list[Path]:
-    """Write ``estimation.png``, ``friction_cones.png``, ``control.png`` and ``animation.gif`` into
-    ``folder`` (created if needed) and return their paths.
-    """
+def write_figures(run: Run, folder: str | Path, dpi: int = 100) -> list[Path]:
+    """Write ``estimation.png`` (Fig. 6), ``friction_cones.png`` (Fig. 7), ``control.png`` (Fig. 8) and
+    ``animation.gif`` into ``folder`` (created if needed) and return their paths."""
+    record = as_record(run)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     paths = []

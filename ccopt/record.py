@@ -312,7 +312,7 @@ def _concatenate(parts: list[dict[str, np.ndarray] | None], paths: list[Path]) -
 class Record:
     """A loaded run: time series, metadata and (if the run closed) its summary."""
 
-    folder: Path
+    folder: Path | None
     data: dict[str, np.ndarray]
     meta: dict[str, object]
     summary: dict[str, object] | None

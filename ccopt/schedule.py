@@ -34,6 +34,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import ClassVar
@@ -502,16 +503,25 @@ def _goal_to_dict(goal: Goal) -> dict[str, object]:
 def _motion_to_dict(step: Step) -> dict[str, object]:
     if step.kind == "hold":
         return {"motion": "hold", "duration_s": step.timeout}
-    if step.kind == "pivot":
-        return {
-            "motion": "pivot",
-            "delta_deg": float(np.rad2deg(step.delta)),
-            "tolerance_deg": float(np.rad2deg(step.tolerance)),
-            "timeout_s": step.timeout,
-        }
+    delta_key, tolerance_key, to_si = _FIELDS[step.kind]
+    per_unit = float(np.rad2deg(1.0)) if step.kind == "pivot" else 1e3
     return {
         "motion": step.kind,
-        "delta_mm": step.delta * 1e3,
-        "tolerance_mm": step.tolerance * 1e3,
+        delta_key: _file_value(step.delta, per_unit, to_si),
+        tolerance_key: _file_value(step.tolerance, per_unit, to_si),
         "timeout_s": step.timeout,
     }
+
+
+def _file_value(si: float, per_unit: float, to_si: Callable[[float], float]) -> float:
+    """``si`` in the file's unit (``per_unit`` of them per SI unit): of the floats within a few ulps of
+    the product, the one that ``to_si`` reads back as exactly ``si`` if any (a run's ``meta.json``
+    then repeats the run to the last bit), else the product."""
+    value = si * per_unit
+    for direction in (np.inf, -np.inf):
+        candidate = value
+        for _ in range(4):
+            if float(to_si(candidate)) == si:
+                return float(candidate)
+            candidate = float(np.nextafter(candidate, direction))
+    return float(value)

@@ -1,4 +1,5 @@
-"""``python -m studies NAME [ARGS]``: run one study (``--help`` after NAME for its options).
+"""``ccopt study NAME [ARGS]`` (or ``python -m studies NAME [ARGS]``): run one study (``--help`` after
+NAME for its options); without NAME, list the studies, one line each.
 
 Ctrl-C, SIGTERM and SIGHUP stop a study alike (exit status 130, the finished trials kept in its
 ``trials.jsonl``); a second one ends it at once.
@@ -11,22 +12,28 @@ import importlib
 import sys
 from collections.abc import Sequence
 
-from ccopt.cliutil import INTERRUPTED, OneLineParser, fail, stop_signals
-from studies.runner import study_modules
+from ccopt.cliutil import INTERRUPTED, OneLineParser, fail, print_scripts, scripts, stop_signals
+
+PROG = "ccopt study"
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    names = study_modules()
-    parser = OneLineParser(prog="python -m studies", description="Run a scripted study.")
-    parser.add_argument("name", help="one of: " + ", ".join(names))
+    studies = scripts("studies")
+    parser = OneLineParser(prog=PROG, description="Run a scripted study; without NAME, list them.")
+    parser.add_argument("name", nargs="?", help="one of: " + ", ".join(studies))
     parser.add_argument("rest", nargs=argparse.REMAINDER, help="the study's own arguments")
     args = parser.parse_args(argv)
-    if args.name not in names:
-        fail(parser.prog, f"unknown study {args.name!r}; expected one of: {', '.join(names)}")
-    prog = f"{parser.prog} {args.name}"
+    if args.name is None:
+        print_scripts(
+            "studies:", studies, f"run one with '{PROG} NAME [--quick]'; '{PROG} NAME --help' for its options"
+        )
+        return 0
+    if args.name not in studies:
+        fail(PROG, f"unknown study {args.name!r}; expected one of: {', '.join(studies)}")
+    prog = f"{PROG} {args.name}"
     with stop_signals(prog):
         try:
-            return importlib.import_module(names[args.name]).main(args.rest)
+            return importlib.import_module(f"studies.{args.name}").main(args.rest)
         except KeyboardInterrupt:
             sys.stderr.write(f"{prog}: interrupted\n")
             return INTERRUPTED

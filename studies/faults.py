@@ -1,6 +1,6 @@
 """Sensor faults in closed loop: does every run end safely, in time, with its record kept?
 
-    python -m studies faults [--quick] [--faults none,dead-ft,scale-ft:3] [--objects paper-square]
+    ccopt study faults [--quick] [--faults none,dead-ft,scale-ft:3] [--objects paper-square]
                              [--start 1.0] [--schedule smoke] [--plant planar] [--workers 2]
 
 Each trial runs one sensor fault (:data:`FAULTS`, ``KIND[:VALUE]``, see
@@ -262,7 +262,7 @@ def names(value: str) -> list[str]:
 
 
 def make_parser() -> argparse.ArgumentParser:
-    parser = runner.study_parser("faults", __doc__.split("\n")[0])
+    parser = runner.study_parser("faults", __doc__.split("\n")[0], "the first object only")
     runner.closed_loop_arguments(parser, schedule="smoke")
     lists = (
         ("--faults", FAULTS, f"faults KIND[:VALUE] or {NO_FAULT} (no fault)"),
@@ -274,7 +274,6 @@ def make_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--start", type=float, default=START, metavar="S", help=f"when faults start, s (default: {START:g})"
     )
-    parser.add_argument("--quick", action="store_true", help="the first object only")
     return parser
 
 
@@ -296,7 +295,7 @@ def checked_faults(prog: str, faults: Sequence[str], start: float) -> list[str]:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = make_parser()
     args = parser.parse_args(argv)
-    runner.checked_schedule(parser.prog, args.schedule)
+    schedule = runner.checked_schedule(parser.prog, args)
     faults = checked_faults(parser.prog, args.faults, args.start)
     objects = args.objects[:1] if args.quick else args.objects
     for name in objects:
@@ -305,7 +304,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         except ValueError as error:
             fail(parser.prog, str(error))
     options = runner.RunOptions.from_args(args)
-    specs = make_specs(faults, args.start, objects, args.seed, args.schedule, args.plant, options.out)
+    specs = make_specs(faults, args.start, objects, args.seed, schedule, args.plant, options.out)
     results = runner.run_study(parser.prog, fault_trial, specs, options)
     summary = summarise(specs, results)
     runner.write_results(options.out, specs, results, summary)

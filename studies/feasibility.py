@@ -1,6 +1,6 @@
 """Which contact configurations can be held — and which motions allowed — for which objects (offline).
 
-    python -m studies feasibility [--mu-hand 0.1:1.0:10] [--theta=-30:30:13] [--mu-ground 0.4,0.8] ...
+    ccopt study feasibility [--mu-hand 0.1:1.0:10] [--theta=-30:30:13] [--mu-ground 0.4,0.8] ...
 
 For one configuration of the reduced model below and one commanded motion (:class:`ccopt.modes.Motion`),
 the statics LP of :func:`ccopt.statics.best_wrench` finds the hand wrench with the largest margin (N)
@@ -159,7 +159,8 @@ def heat_map(path: Path, chunk: FeasibilityChunk, result: dict) -> None:
         ax.set_ylabel("μ_h")
     figure.colorbar(image, ax=axes, label=f"margin (N); feasible ≥ {chunk.min_margin:g}")
     figure.suptitle(
-        f"μ_g={chunk.mu_ground:g}  m={chunk.mass:g} kg  d={chunk.d * 1e3:g} mm  s_h={chunk.s_h * 1e3:g} mm  "
+        f"statics margin (no paper figure): μ_g={chunk.mu_ground:g}  m={chunk.mass:g} kg  "
+        f"d={chunk.d * 1e3:g} mm  s_h={chunk.s_h * 1e3:g} mm  "
         f"f_n∈[{chunk.force_limits[0]:g}, {chunk.force_limits[1]:g}] N"
     )
     figure.savefig(path, dpi=110)
@@ -205,34 +206,47 @@ def grid_values(value: str) -> tuple[float, ...]:
     return tuple(float(v) for v in np.round(numbers, 12))  # 0.30000000000000004 → 0.3
 
 
+GRID_FLAGS = {
+    "--mu-hand": "μ_h values",
+    "--theta": "θ_o values, deg",
+    "--mu-ground": "μ_g values",
+    "--mass": "object masses, kg",
+    "--d": "ground contact to hand face, mm",
+    "--s-hand": "hand position along the face s_h, mm",
+    "--force-limits": "f_min,f_max, N",
+}
+FULL = {
+    "--mu-hand": "0.1:1.0:10",
+    "--theta": "-30:30:13",
+    "--mu-ground": "0.4,0.8",
+    "--mass": "0.195,0.695",
+    "--d": "116",
+    "--s-hand": "0",
+    "--force-limits": "3,25",
+}
+QUICK = {**FULL, "--mu-hand": "0.3,0.7", "--theta": "-20,0,20", "--mu-ground": "0.8", "--mass": "0.195"}
+"""The grid flags' values by default and with ``--quick``."""
+
+
 def make_parser() -> argparse.ArgumentParser:
     description = (
         __doc__.split("\n")[0] + " LIST is a,b,c or start:stop:count (write --theta=-30:30:13 for a"
         " leading minus). Deterministic: --seed has no effect."
     )
-    parser = runner.study_parser("feasibility", description)
+    parser = runner.study_parser(
+        "feasibility", description, "a 2 × 3 grid of μ_h × θ_o at one μ_g and one mass (unless given)"
+    )
 
     def grid(flag: str, default: str, what: str) -> None:
-        parser.add_argument(
-            flag,
-            type=grid_values,
-            default=grid_values(default),
-            metavar="LIST",
-            help=f"{what} (default: {default})",
-        )
+        parser.add_argument(flag, type=grid_values, metavar="LIST", help=f"{what} (default: {default})")
 
     def number(flag: str, default: float, what: str) -> None:
         parser.add_argument(
             flag, type=float, default=default, metavar="X", help=f"{what} (default: {default:g})"
         )
 
-    grid("--mu-hand", "0.1:1.0:10", "μ_h values")
-    grid("--theta", "-30:30:13", "θ_o values, deg")
-    grid("--mu-ground", "0.4,0.8", "μ_g values")
-    grid("--mass", "0.195,0.695", "object masses, kg")
-    grid("--d", "116", "ground contact to hand face, mm")
-    grid("--s-hand", "0", "hand position along the face s_h, mm")
-    grid("--force-limits", "3,25", "f_min,f_max, N")
+    for flag, what in GRID_FLAGS.items():
+        grid(flag, FULL[flag], what)
     number("--com-along", 0.0, "centre of mass along the face, mm")
     number("--com-height", 77.0, "centre of mass from the ground contact towards the face, mm")
     number("--l-hand", 50.0, "hand half-length l_h, mm")
@@ -261,6 +275,10 @@ def _fixed(args: argparse.Namespace, prog: str) -> dict[str, object]:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = make_parser()
     args = parser.parse_args(argv)
+    for flag, value in (QUICK if args.quick else FULL).items():
+        name = flag[2:].replace("-", "_")
+        if getattr(args, name) is None:
+            setattr(args, name, grid_values(value))
     fixed = _fixed(args, parser.prog)
     grid = {
         "mu_hand": args.mu_hand,

@@ -191,11 +191,10 @@ def overview_rows(summary: Mapping[str, object]) -> list[tuple[str, str]]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = runner.study_parser("goals", __doc__.split("\n")[0])
+    parser = runner.study_parser("goals", __doc__.split("\n")[0], "6 trials of 3 goals")
     parser.add_argument("--trials", type=runner.positive_int, default=40, metavar="N", help="random objects")
     parser.add_argument("--goals", type=runner.positive_int, default=4, metavar="N", help="goals per trial")
     parser.add_argument("--plant", choices=("planar", "panda"), default="planar", help="simulated robot")
-    parser.add_argument("--quick", action="store_true", help="6 trials of 3 goals")
     args = parser.parse_args(argv)
     trials, goals = (6, 3) if args.quick else (args.trials, args.goals)
     seeds = runner.trial_seeds(args.seed, trials)

@@ -1,6 +1,6 @@
 """Symbolic derivatives against central finite differences: the contact model and the QP's solution.
 
-    python -m studies gradients [--seeds 4] [--points 20] [--instances 40]
+    ccopt study gradients [--seeds 4] [--points 20] [--instances 40]
 
 Contact model
     For every function of :data:`ccopt.contact.CONTACT_FUNCTIONS`, at random points: the CasADi
@@ -319,13 +319,22 @@ def summarise(specs: Sequence[GradientTrial], results: Sequence[dict]) -> dict:
     return summary
 
 
+FULL = {"seeds": 4, "points": 20, "instances": 40}
+QUICK = {"seeds": 1, "points": 5, "instances": 10}
+"""Trials per function, random points and QP instances per trial, by default and with ``--quick``."""
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = runner.study_parser("gradients", __doc__.split("\n")[0])
-    parser.add_argument("--seeds", type=runner.positive_int, default=4, help="trials per function")
-    parser.add_argument("--points", type=runner.positive_int, default=20, help="random points per trial")
-    parser.add_argument("--instances", type=runner.positive_int, default=40, help="QP instances per trial")
+    parser = runner.study_parser(
+        "gradients", __doc__.split("\n")[0], "1 trial of 5 points and 10 QP instances (unless given)"
+    )
+    parser.add_argument("--seeds", type=runner.positive_int, help="trials per function (default: 4)")
+    parser.add_argument("--points", type=runner.positive_int, help="random points per trial (default: 20)")
+    parser.add_argument("--instances", type=runner.positive_int, help="QP instances per trial (default: 40)")
     args = parser.parse_args(argv)
-    specs = make_specs(args.seed, args.seeds, args.points, args.instances)
+    sizes = QUICK if args.quick else FULL
+    counts = [getattr(args, name) or sizes[name] for name in ("seeds", "points", "instances")]
+    specs = make_specs(args.seed, *counts)
     options = runner.RunOptions.from_args(args)
     results = runner.run_study(parser.prog, gradient_trial, specs, options)
     summary = summarise(specs, results)

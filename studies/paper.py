@@ -1,6 +1,6 @@
 """The paper's §VII experiment: ten closed-loop trials over the five paper objects, scored against truth.
 
-    python -m studies paper [--schedule paper] [--plant planar] [--trials 10] [--workers 2]
+    ccopt study paper [--schedule paper] [--plant planar] [--trials 10] [--workers 2]
 
 The ten trials (:data:`TRIALS`): each of the five ``paper-*`` objects; the triangle and the pentagon
 with 0.5 kg added (as in the paper); and a second run of the triangle, the square and the hexagon.
@@ -195,12 +195,13 @@ HEADER = (
 
 
 def make_parser() -> argparse.ArgumentParser:
-    parser = runner.study_parser("paper", __doc__.split("\n")[0])
+    parser = runner.study_parser(
+        "paper", __doc__.split("\n")[0], "the first trial only (unless --trials) on the smoke schedule"
+    )
     runner.closed_loop_arguments(parser)
     parser.add_argument(
         "--trials",
         type=runner.positive_int,
-        default=len(TRIALS),
         metavar="K",
         help=f"run only the first K of the {len(TRIALS)} trials (default: {len(TRIALS)})",
     )
@@ -210,11 +211,12 @@ def make_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = make_parser()
     args = parser.parse_args(argv)
-    if args.trials > len(TRIALS):
-        fail(parser.prog, f"--trials must be at most {len(TRIALS)}, got {args.trials}")
-    runner.checked_schedule(parser.prog, args.schedule)
+    trials = args.trials or (1 if args.quick else len(TRIALS))
+    if trials > len(TRIALS):
+        fail(parser.prog, f"--trials must be at most {len(TRIALS)}, got {trials}")
+    schedule = runner.checked_schedule(parser.prog, args)
     options = runner.RunOptions.from_args(args)
-    specs = make_specs(args.seed, args.trials, args.schedule, args.plant, options.out)
+    specs = make_specs(args.seed, trials, schedule, args.plant, options.out)
     results = runner.run_study(parser.prog, paper_trial, specs, options)
     summary = summarise(specs, results)
     summary["figures"] = [str(path) for path in write_figures(options.out, specs, results)]

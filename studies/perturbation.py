@@ -1,6 +1,6 @@
 """Perturbation rejection (paper §VII, Fig. 9): push a regulated object and watch the error recover.
 
-    python -m studies perturbation [--forces 5,10,14] [--duration 0.15] [--object paper-triangle]
+    ccopt study perturbation [--forces 5,10,14] [--duration 0.15] [--object paper-triangle]
 
 For each regulation (:func:`regulations`), push direction (``+x``, ``−x``) and push size, one
 closed-loop run holds a coordinate at its value while an external horizontal force
@@ -37,8 +37,8 @@ Which pushes cannot recover, and why (the ``why`` column):
 
 ``held mode`` and ``hand, not object`` can both apply (joined by ``;``).
 
-Outputs in ``<out>``: ``results.json``/``results.csv`` (traces included) and ``perturbation.png``
-(error traces per regulation and push direction, grey during the push, like Fig. 9).
+Outputs in ``<out>``: ``results.json`` (traces included), ``results.csv`` (flat, no traces) and
+``perturbation.png`` (error traces per regulation and push direction, grey during the push, like Fig. 9).
 """
 
 from __future__ import annotations
@@ -303,7 +303,9 @@ def write_figure(path: Path, specs: Sequence[Push], results: Sequence[dict]) -> 
             ax.set_ylabel(f"error ({UNIT[k]})")
     for ax in axes[-1]:
         ax.set_xlabel("time from push start (s)")
-    figure.suptitle("True error of the regulated coordinate (black; grey: pushed) and measured (blue)")
+    figure.suptitle(
+        "Fig. 9: true error of the regulated coordinate (black; grey: pushed) and measured (blue)"
+    )
     figure.savefig(path, dpi=110)
 
 
@@ -337,21 +339,28 @@ def coordinate_list(value: str) -> tuple[str, ...]:
     return names
 
 
+FULL = {"coordinates": modes.COORDINATES, "forces": (5.0, 10.0, 14.0), "window": 4.0}
+QUICK = {"coordinates": ("theta_o",), "forces": (5.0,), "window": 1.5}
+"""The regulated coordinates, push sizes (N) and window (s) a study runs by default, and with ``--quick``."""
+
+
 def make_parser() -> argparse.ArgumentParser:
-    parser = runner.study_parser("perturbation", __doc__.split("\n")[0])
+    parser = runner.study_parser(
+        "perturbation",
+        __doc__.split("\n")[0],
+        "θ_o regulated against one 5 N push each way, 1.5 s after it (unless given otherwise)",
+    )
     parser.add_argument("--object", default="paper-triangle", help="library object (default: paper-triangle)")
     parser.add_argument("--plant", choices=("planar", "panda"), default="planar", help="default: planar")
     parser.add_argument(
         "--coordinates",
         type=coordinate_list,
-        default=modes.COORDINATES,
         metavar="LIST",
         help="regulated coordinates (default: theta_o,s_h,s_g)",
     )
     parser.add_argument(
         "--forces",
         type=force_list,
-        default=(5.0, 10.0, 14.0),
         metavar="LIST",
         help="push sizes, N (default: 5,10,14)",
     )
@@ -364,7 +373,6 @@ def make_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--window",
         type=positive_float,
-        default=4.0,
         metavar="S",
         help="run on after the push starts, s (default: 4)",
     )
@@ -374,6 +382,9 @@ def make_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = make_parser()
     args = parser.parse_args(argv)
+    for name, value in (QUICK if args.quick else FULL).items():
+        if getattr(args, name) is None:
+            setattr(args, name, value)
     if args.object not in OBJECT_NAMES:
         fail(parser.prog, f"unknown object {args.object!r}; valid names: {', '.join(OBJECT_NAMES)}")
     if args.duration >= args.window:

@@ -1,6 +1,6 @@
 """The QP's constraints and feasible region for one estimate (paper Fig. 4b–c).
 
-    python -m studies qp-region [--theta 10] [--s-hand 10] [--wrench 12,1.5,0.1] [--motion pivot] ...
+    ccopt study qp_region [--theta 10] [--s-hand 10] [--wrench 12,1.5,0.1] [--motion pivot] ...
 
 The estimate is exact here: the cone is the true one of the given object
 (:func:`ccopt.contact.model_friction_cone`), the kinematics are known, and the controller
@@ -56,6 +56,7 @@ _DEFAULT_CHANGE = {Motion.HOLD: 0.0, Motion.PIVOT: 2.0} | {
 """Default commanded changes at the command line (deg), else 1 mm: one the tick can achieve, so that
 the minimising plane cuts the region as in the paper's figure (7.2°, the paper's whole increment,
 asks for more than one tick allows and the plane misses the region)."""
+
 
 def _commanded(motion: Motion) -> int:
     """The column of the admissible-motion vectors ``(v_θ, v_h, v_g)`` a motion's cost drives (a hold
@@ -300,7 +301,7 @@ def constraints_figure(path: Path, state: RegionState, region: Region) -> None:
         ax.set_xlabel(("f_t (N)", "τ (N·m)")[i - 1])
         ax.set_ylabel("f_n (N)")
         ax.legend(loc="lower right", fontsize=8)
-    figure.suptitle(f"{state.motion.value}: θ_o = {np.rad2deg(state.theta_o):.1f}°, hand frame")
+    figure.suptitle(f"Fig. 4b: {state.motion.value} at θ_o = {np.rad2deg(state.theta_o):.1f}°, hand frame")
     figure.savefig(path, dpi=120)
 
 
@@ -338,7 +339,10 @@ def region_figure(path: Path, state: RegionState, region: Region) -> None:
         notes.append("minimising plane misses the region")
     if region.clipped:
         notes.append("region cut by the drawing box")
-    ax.set_title(f"{state.motion.value}: QP feasible region" + (f" ({'; '.join(notes)})" if notes else ""))
+    ax.set_title(
+        f"Fig. 4c: {state.motion.value}, the QP's feasible region"
+        + (f" ({'; '.join(notes)})" if notes else "")
+    )
     ax.legend(loc="upper left", fontsize=8)
     figure.savefig(path, dpi=120)
 
@@ -377,7 +381,9 @@ def positive(value: str) -> float:
 
 
 def make_parser() -> argparse.ArgumentParser:
-    parser = runner.study_parser("qp-region", __doc__.split("\n")[0], trials=False)
+    parser = runner.study_parser(
+        "qp_region", __doc__.split("\n")[0], "no effect: the study is one QP solve (about 2 s)", trials=False
+    )
     add = parser.add_argument
     add("--theta", type=finite, default=10.0, help="θ_o, deg")
     add("--s-hand", type=finite, default=10.0, help="s_h, mm")
@@ -414,6 +420,13 @@ def state_from_args(args: argparse.Namespace) -> RegionState:
     )
 
 
+RESULT_UNITS = (
+    "SI: state (rad, m, kg, N), step and region/plane vertices (Δn, Δt, Δθ) in m, m, rad in the hand "
+    "frame; slack and target_qp_units in the QP's scaled units (mm, deg, N)"
+)
+"""What ``results.json`` says of its units."""
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = make_parser()
     args = parser.parse_args(argv)
@@ -427,15 +440,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     region_figure(args.out / "region.png", state, region)
     solution = region.output.solution
     summary = {
+        "units": RESULT_UNITS,
         "state": runner.spec_dict(state),
-        "step": solution.step,
+        "step": solution.step * region.scale / PLOT_SCALE,
         "slack": solution.slack,
         "feasible": solution.feasible,
-        "region_vertices": region.vertices,
+        "region_vertices": None if region.vertices is None else region.vertices / PLOT_SCALE,
         "region_empty": region.vertices is None,
-        "plane_vertices": region.plane,
+        "plane_vertices": None if region.plane is None else region.plane / PLOT_SCALE,
         "direction": region.direction,
-        "target": region.target,
+        "target_qp_units": region.target,
         "clipped": region.clipped,
     }
     write_json(args.out / "results.json", runner.json_ready(summary))

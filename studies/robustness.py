@@ -1,6 +1,6 @@
 """Closed-loop robustness over randomised objects: success rate, error distributions, failure causes.
 
-    python -m studies robustness [--trials 50] [--schedule paper] [--plant planar] [--workers 2]
+    ccopt study robustness [--trials 50] [--schedule paper] [--plant planar] [--workers 2]
 
 Each trial draws, from its own seed (:func:`studies.runner.trial_seeds` of ``--seed``), one of the
 five shapes (:data:`SHAPES`) with side 7–19 cm (a rectangle draws width and height in 7–19 cm),
@@ -46,6 +46,9 @@ MASS = (0.2, 0.95)
 """Range of the mass, kg."""
 MU_HAND = (0.3, 0.7)
 MU_GROUND = (0.4, 0.9)
+TRIALS = 50
+QUICK_TRIALS = 3
+"""Random objects of a study, and of one run with ``--quick``."""
 DOES_NOT_FIT = "does not fit the hand"
 RUN_ERROR = "run error"
 CAUSES = (*metrics.CAUSES, DOES_NOT_FIT, RUN_ERROR)
@@ -171,7 +174,7 @@ def write_figure(path: Path, specs: Sequence[RandomObject], results: Sequence[di
         values = column(results, key)
         if values:
             ax.boxplot(values, widths=0.5)
-        ax.set_title(f"{title}, {len(values)} trials")
+        ax.set_title(f"{title}, {len(values)} trials (no paper figure)")
         ax.set_xticks([])
     ratios = column(results, "ratio_median")
     if ratios:
@@ -237,10 +240,12 @@ def overview_rows(summary: Mapping[str, object]) -> list[tuple[str, ...]]:
 
 
 def make_parser() -> argparse.ArgumentParser:
-    parser = runner.study_parser("robustness", __doc__.split("\n")[0])
+    parser = runner.study_parser(
+        "robustness", __doc__.split("\n")[0], f"{QUICK_TRIALS} trials (unless --trials) on the smoke schedule"
+    )
     runner.closed_loop_arguments(parser)
     parser.add_argument(
-        "--trials", type=runner.positive_int, default=50, metavar="N", help="random objects (default: 50)"
+        "--trials", type=runner.positive_int, metavar="N", help=f"random objects (default: {TRIALS})"
     )
     return parser
 
@@ -248,9 +253,9 @@ def make_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = make_parser()
     args = parser.parse_args(argv)
-    runner.checked_schedule(parser.prog, args.schedule)
-    seeds = runner.trial_seeds(args.seed, args.trials)
-    specs = [draw_object(k, seed, args.schedule, args.plant) for k, seed in enumerate(seeds)]
+    schedule = runner.checked_schedule(parser.prog, args)
+    seeds = runner.trial_seeds(args.seed, args.trials or (QUICK_TRIALS if args.quick else TRIALS))
+    specs = [draw_object(k, seed, schedule, args.plant) for k, seed in enumerate(seeds)]
     options = runner.RunOptions.from_args(args)
     results = runner.run_study(parser.prog, robustness_trial, specs, options)
     summary = summarise(specs, results)

@@ -24,8 +24,8 @@ thread-safe (parametrised cvxpy problems, simulators) belongs in a
 The closed-loop studies share their command-line options (:func:`closed_loop_arguments`), table cells
 (:func:`cell`, :func:`slips_cell`) and the stop on Ctrl-C (:func:`finished`).
 
-Each study module has ``main(argv) -> int``; :func:`study_modules` is the registry behind
-``python -m studies NAME``.
+Each study module has ``main(argv) -> int`` and ``--quick``; every module of this package that defines
+``main`` is a study (:func:`ccopt.cliutil.scripts`), run as ``ccopt study NAME``.
 """
 
 from __future__ import annotations
@@ -56,7 +56,8 @@ from tqdm import tqdm
 
 from ccopt.cliutil import STOP_SIGNALS, OneLineParser, fail, seed_value, write_json
 from ccopt.closed_loop import RunResult
-from ccopt.schedule import Schedule, load_schedule
+from ccopt.config import UNITS
+from ccopt.schedule import load_schedule
 
 Spec = Any
 """A trial spec: a dataclass instance or a dict, JSON-serialisable once through :func:`spec_dict`."""
@@ -67,20 +68,6 @@ T = TypeVar("T")
 TRIALS_LOG = "trials.jsonl"
 SCHEDULER_TIMEOUT = "10s"
 """How long to wait for a Dask scheduler before giving up."""
-
-
-def study_modules() -> dict[str, str]:
-    """Study name (as typed after ``python -m studies``) → module with a ``main(argv) -> int``."""
-    return {
-        "feasibility": "studies.feasibility",
-        "qp-region": "studies.qp_region",
-        "gradients": "studies.gradients",
-        "paper": "studies.paper",
-        "robustness": "studies.robustness",
-        "perturbation": "studies.perturbation",
-        "faults": "studies.faults",
-        "goals": "studies.goals",
-    }
 
 
 # --- command line ---------------------------------------------------------------------------------
@@ -122,15 +109,16 @@ def output_folder(value: str) -> Path:
     return path
 
 
-def study_parser(name: str, description: str, trials: bool = True) -> OneLineParser:
+def study_parser(name: str, description: str, quick: str, trials: bool = True) -> OneLineParser:
     """The parser of study ``name`` with the shared options; the study adds its own.
 
-    ``--out DIR`` (default ``runs/study-NAME``) always; with ``trials``, also ``--workers N``
+    ``--out DIR`` (default ``runs/study-NAME``) and ``--quick`` (``quick`` says what it shrinks) always;
+    with ``trials``, also ``--workers N``
     (default :func:`default_workers`), ``--scheduler ADDRESS``, ``--seed``, ``--no-progress`` and
     ``--fresh`` (run every trial again instead of resuming, see :func:`run_study`).
     Bad values end the program with one line on stderr and exit status 2.
     """
-    parser = OneLineParser(prog=f"python -m studies {name}", description=description)
+    parser = OneLineParser(prog=f"ccopt study {name}", description=description)
     parser.add_argument(
         "--out",
         type=output_folder,
@@ -138,6 +126,7 @@ def study_parser(name: str, description: str, trials: bool = True) -> OneLinePar
         metavar="DIR",
         help="output folder, created (default: %(default)s)",
     )
+    parser.add_argument("--quick", action="store_true", help=quick)
     if trials:
         parser.add_argument(
             "--workers",
@@ -454,27 +443,50 @@ def finished_trials(records: Sequence[dict], specs: Sequence[Spec]) -> dict[int,
     return found
 
 
-def write_results(out: Path, specs: Sequence[Spec], results: Sequence[dict], summary: dict) -> None:
-    """``results.json`` (summary and every trial) and ``results.csv`` (one row per trial) in ``out``.
+CSV_LIST_MOST = 16
+"""Longest list a ``results.csv`` cell holds (its items joined by ``;``); longer ones (traces, grids)
+are in ``results.json`` only."""
 
-    CSV columns are the spec's fields then the result's; list values are written as JSON.
-    """
+
+def csv_row(row: Mapping[str, Any]) -> dict[str, Any]:
+    """A flat CSV row of a JSON-ready mapping: nested mappings as ``outer.inner`` columns, a list of up
+    to :data:`CSV_LIST_MOST` plain values as its items joined by ``;`` (None empty), longer lists and
+    lists of mappings left out; never a JSON array in a cell."""
+    flat: dict[str, Any] = {}
+    for key, value in row.items():
+        if isinstance(value, Mapping):
+            flat.update({f"{key}.{inner}": item for inner, item in csv_row(value).items()})
+        elif isinstance(value, list):
+            plain = all(not isinstance(item, list | Mapping) for item in value)
+            if plain and len(value) <= CSV_LIST_MOST:
+                flat[key] = ";".join("" if item is None else str(item) for item in value)
+        else:
+            flat[key] = value
+    return flat
+
+
+def write_results(
+    out: Path, specs: Sequence[Spec], results: Sequence[dict], summary: dict, units: str = UNITS
+) -> None:
+    """``results.json`` (``units``, the summary and every trial) and ``results.csv`` (one flat row per
+    trial, :func:`csv_row`: the spec's fields then the result's) in ``out``."""
     rows = [{**spec_dict(spec), **json_ready(result)} for spec, result in zip(specs, results, strict=True)]
     write_json(
         out / "results.json",
         {
+            "units": units,
             "summary": json_ready(summary),
             "trials": [
                 {"spec": spec_dict(s), "result": json_ready(r)} for s, r in zip(specs, results, strict=True)
             ],
         },
     )
-    columns = list(dict.fromkeys(key for row in rows for key in row))
+    flat = [csv_row(row) for row in rows]
+    columns = list(dict.fromkeys(key for row in flat for key in row))
     with open(out / "results.csv", "w", newline="") as stream:
         writer = csv.DictWriter(stream, fieldnames=columns)
         writer.writeheader()
-        for row in rows:
-            writer.writerow({k: json.dumps(v) if isinstance(v, list | dict) else v for k, v in row.items()})
+        writer.writerows(flat)
 
 
 def failures(results: Sequence[dict]) -> list[tuple[int, str]]:
@@ -510,21 +522,30 @@ def slips_cell(row: Mapping[str, object]) -> str:
     return f"{row['unintended_slips']} ({parts})"
 
 
+QUICK_SCHEDULE = "smoke"
+"""The schedule of a closed-loop study run with ``--quick`` (unless ``--schedule`` names one)."""
+
+
 def closed_loop_arguments(parser: argparse.ArgumentParser, schedule: str = "paper") -> None:
-    """``--schedule`` (default ``schedule``) and ``--plant``, shared by the closed-loop studies."""
+    """``--schedule`` (default ``schedule``, :data:`QUICK_SCHEDULE` with ``--quick``) and ``--plant``,
+    shared by the closed-loop studies; :func:`checked_schedule` reads the schedule chosen."""
     parser.add_argument(
         "--schedule",
-        default=schedule,
-        help=f"built-in (paper, smoke) or a .yaml/.json file (default: {schedule})",
+        help=f"built-in (paper, smoke) or a .yaml/.json file (default: {schedule}; "
+        f"with --quick: {QUICK_SCHEDULE})",
     )
+    parser.set_defaults(default_schedule=schedule)
     parser.add_argument(
         "--plant", choices=("planar", "panda"), default="planar", help="simulated robot (default: planar)"
     )
 
 
-def checked_schedule(prog: str, name: str) -> Schedule:
-    """The schedule ``name``, or one line and exit 2."""
+def checked_schedule(prog: str, args: argparse.Namespace) -> str:
+    """The schedule a closed-loop study's ``args`` choose (see :func:`closed_loop_arguments`), checked:
+    its name or file, or one line and exit 2."""
+    name = args.schedule or (QUICK_SCHEDULE if args.quick else args.default_schedule)
     try:
-        return load_schedule(name)
+        load_schedule(name)
     except ValueError as error:
         fail(prog, str(error))
+    return name

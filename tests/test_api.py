@@ -39,3 +39,21 @@ def test_the_library_does_not_depend_on_its_studies():
     code = "import sys, ccopt.experiment, ccopt.cli, ccopt.plots; print('studies' in sys.modules)"
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert done.stdout.strip() == "False"
+
+
+def test_figures_and_summaries_take_a_run_s_own_results_in_memory():
+    from ccopt import metrics, plots
+    from ccopt.closed_loop import Supervision
+
+    schedule = ccopt.load_schedule("smoke")
+    params = ccopt.LoopParams(supervision=Supervision(max_time=0.8))
+    done = ccopt.run_experiment(ccopt.make_object("paper-square"), schedule, params, seed=2)
+    assert done.folder is None and len(done.result.samples["time"]) > 50
+    summary = metrics.summarize(done.result, schedule)  # the run's own result and its schedule
+    assert summary == {key: done.summary[key] for key in summary}
+    for run in (done, done.result):
+        traces = plots.estimation_traces(run)
+        true = next(line for line in traces.axes[0].get_lines() if line.get_label() == "true")
+        assert len(true.get_xdata()) == len(done.result.samples["time"])
+    title = plots.friction_cones(done).get_suptitle()
+    assert "paper-square" in title and "true" in title  # the object of the run's metadata

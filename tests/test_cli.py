@@ -57,3 +57,44 @@ def test_help_everywhere():
     for args in (["--help"], ["run", "--help"], ["plot", "--help"], ["study", "--help"], ["bench", "--help"]):
         result = ccopt(*args)
         assert result.returncode == 0 and "usage" in result.stdout
+
+
+def test_bare_ccopt_prints_its_usage_with_every_command():
+    result = ccopt()
+    assert result.returncode == 0 and result.stdout.startswith("usage: ccopt")
+    for command in ("run", "plot", "view", "objects", "study", "bench"):
+        assert f"\n    {command} " in result.stdout, command
+
+
+def test_objects_lists_every_library_object_with_its_faces_and_mass():
+    from ccopt import objects
+
+    result = ccopt("objects")
+    assert result.returncode == 0
+    rows = {line.split()[0]: line.split() for line in result.stdout.splitlines()[2:] if line.strip()}
+    for name in objects.OBJECT_NAMES:
+        obj = objects.make_object(name)
+        assert rows[name][1] == str(obj.n_faces), name
+        assert f"{obj.mass:.3f}" in rows[name], name
+
+
+def test_study_and_bench_without_a_name_list_each_script_on_one_line():
+    from ccopt.cliutil import scripts
+
+    for command, package in (("study", "studies"), ("bench", "benchmarks")):
+        result = ccopt(command)
+        assert result.returncode == 0
+        found = scripts(package)
+        listed = [line.split()[0] for line in result.stdout.splitlines()[1:-1]]
+        assert listed == list(found) and len(found) >= 3, result.stdout
+
+
+def test_a_study_names_itself_as_ccopt_study_in_its_errors_and_every_study_has_quick():
+    from ccopt.cliutil import scripts
+
+    bad = ccopt("study", "gradients", "--points", "0")
+    assert bad.returncode == 2 and bad.stderr.startswith("ccopt study gradients: error:"), bad.stderr
+    for name in scripts("studies"):
+        result = ccopt("study", name, "--help")
+        assert result.returncode == 0 and "--quick" in result.stdout, name
+        assert result.stdout.startswith(f"usage: ccopt study {name}"), name

@@ -6,7 +6,7 @@ from matplotlib.colors import to_rgba
 from matplotlib.figure import Figure
 from PIL import Image
 
-from ccopt import geometry, plots
+from ccopt import geometry, plots, replay
 from ccopt.record import RecordWriter, load_record
 
 DT = 0.01
@@ -177,12 +177,47 @@ def test_friction_cones_colour_points_by_true_mode(run):
         np.testing.assert_allclose(sliding.get_facecolor()[0], to_rgba(plots.SLIDING_COLOR))
     hand_sliding = run["true_contacts"][:, 0] & (run["true_modes"][:, 0] != 0)
     np.testing.assert_allclose(hand.collections[1].get_offsets(), run["hand_wrench"][hand_sliding, :2])
-    mu = run["est_mu_h"][-1]
-    slopes = sorted(np.diff(line.get_ydata())[0] / np.diff(line.get_xdata())[0] for line in hand.get_lines())
-    np.testing.assert_allclose(slopes, [-mu, mu])
-    rows, bounds = run["est_ground_rows"][-1], run["est_ground_bounds"][-1]
-    for line, row, bound in zip(ground.get_lines(), rows, bounds, strict=True):
+
+
+def _slopes(ax, gid):
+    lines = [line for line in ax.get_lines() if line.get_gid() == gid]
+    return sorted(np.diff(line.get_ydata())[0] / np.diff(line.get_xdata())[0] for line in lines)
+
+
+def _on_rows(ax, gid, rows, bounds):
+    """Each ``gid`` line of ``ax`` lies on one row's line ``a·f = b``."""
+    lines = [line for line in ax.get_lines() if line.get_gid() == gid]
+    assert len(lines) == len(rows)
+    for line, row, bound in zip(lines, rows, bounds, strict=True):
         np.testing.assert_allclose(line.get_xydata() @ row, bound)
+
+
+def test_friction_cones_draw_the_true_cones_beside_the_estimate_of_the_instant_they_name(run):
+    hand, ground = plots.friction_cones(run).axes
+    np.testing.assert_allclose(_slopes(hand, "estimated"), [-run["est_mu_h"][-1], run["est_mu_h"][-1]])
+    np.testing.assert_allclose(_slopes(hand, "true"), [-MU_HAND, MU_HAND])
+    _on_rows(ground, "estimated", run["est_ground_rows"][-1], run["est_ground_bounds"][-1])
+    weight = MASS * 9.81  # the ground slides when |f_x| > μ_g (m g − f_y)
+    _on_rows(ground, "true", [[1.0, MU_GROUND], [-1.0, MU_GROUND]], [MU_GROUND * weight] * 2)
+    title = plots.friction_cones(run).get_suptitle()
+    assert "Fig. 7" in title and f"t = {run['time'][-1]:.2f} s" in title and "last" in title
+    early = plots.friction_cones(run, at=2.0)
+    k = np.flatnonzero(run["time"] <= 2.0)[-1]
+    assert f"t = {run['time'][k]:.2f} s" in early.get_suptitle()
+    np.testing.assert_allclose(_slopes(early.axes[0], "estimated"), [-run["est_mu_h"][k], run["est_mu_h"][k]])
+
+
+def test_every_figure_names_the_paper_figure_it_reproduces(run):
+    for draw, number in (
+        (plots.estimation_traces, "Fig. 6a"),
+        (plots.estimation_error_boxes, "Fig. 6b"),
+        (plots.estimation_figure, "Fig. 6"),
+        (plots.friction_cones, "Fig. 7"),
+        (plots.control_errors, "Fig. 8a"),
+        (plots.realised_histogram, "Fig. 8b"),
+        (plots.control_figure, "Fig. 8"),
+    ):
+        assert draw(run).get_suptitle().startswith(number + ":"), draw.__name__
 
 
 def test_ground_panel_shows_the_world_hand_force(run):
@@ -220,10 +255,10 @@ def test_histogram_counts_every_step_of_every_record(run):
 
 def test_animation_scene_puts_the_hand_on_the_object_face(run):
     frames = np.array([0, 150, 350, 600])
-    for i, frame in zip(frames, plots._scene(run, frames), strict=True):
-        polygon, (end_a, end_b) = frame["object"], frame["hand"]
+    for i, frame in zip(frames, replay.scene(run, frames), strict=True):
+        polygon, (end_a, end_b) = frame.object, frame.hand
         np.testing.assert_allclose(polygon.min(axis=0)[1], 0.0, atol=1e-12)  # resting on the ground
-        np.testing.assert_allclose(frame["r_o"], (run["true_coordinates"][i, 2], 0.0), atol=1e-12)
+        np.testing.assert_allclose(frame.r_o, (run["true_coordinates"][i, 2], 0.0), atol=1e-12)
         top = polygon[2:4]  # the hand face (2) lies on the hand segment's line
         normal = geometry.hand_normal(run["true_hand_pose"][i, 2])
         np.testing.assert_allclose((top - end_a) @ normal, 0.0, atol=1e-12)
@@ -243,8 +278,14 @@ def test_write_figures_writes_images_pil_can_open(tmp_path):
         assert path.stat().st_size > 0
         with Image.open(path) as image:
             image.verify()
+    duration = short["time"][-1] - short["time"][0]
     with Image.open(paths[-1]) as gif:
-        assert gif.n_frames == len(short["time"])
+        assert gif.width >= 640
+        shown = [gif.seek(k) or gif.info["duration"] for k in range(gif.n_frames)]
+    speed, count = plots.playback(duration, 120)
+    assert len(shown) == count and set(shown) == {1000 * plots.FRAME_S}
+    # playback proportional to simulated time: the GIF lasts the run's time over the stated speed
+    assert abs(sum(shown) / 1000 * speed - duration) <= speed * plots.FRAME_S
     assert paths[-1].stat().st_size < 2_000_000
 
 
@@ -284,3 +325,52 @@ def test_a_record_with_sensor_dropouts_draws_every_figure_from_its_finite_sample
     assert np.isfinite(ground.get_xlim()).all() and np.isfinite(ground.get_ylim()).all()
     for path in plots.write_figures(record, tmp_path / "figures"):
         assert path.stat().st_size > 0
+
+
+def _read_rrd(path):
+    """Entity path → list of (time s, value) rows of an .rrd, read back with Rerun's own reader."""
+    from rerun.chunk import RrdReader
+
+    rows = {}
+    for chunk in RrdReader(path).stream().to_chunks():
+        batch = chunk.to_record_batch()
+        if "sim_time" not in batch.schema.names:
+            continue
+        times = batch.column("sim_time").cast("int64").to_numpy() * 1e-9
+        primary = (":strips", ":scalars", ":positions", ":vectors", ":text")
+        value = next(name for name in batch.schema.names if name.endswith(primary))
+        for time, item in zip(times, batch.column(value).to_pylist(), strict=True):
+            rows.setdefault(str(chunk.entity_path), []).append((time, item))
+    return {entity: sorted(found, key=lambda row: row[0]) for entity, found in rows.items()}
+
+
+def test_view_writes_an_rrd_whose_series_and_scene_read_back(run, tmp_path):
+    pytest.importorskip("rerun")
+    from ccopt import view
+
+    path = view.log_run(run, save=tmp_path / "run.rrd", spawn=False)
+    found = _read_rrd(path)
+    for entity in (
+        "/scene/object",
+        "/scene/hand",
+        "/scene/contact/estimated",
+        "/scene/cones/hand/true",
+        "/scene/cones/ground/estimated",
+        "/scene/force/measured",
+        "/coordinates/s_g_mm/commanded",
+        "/modes/ground_slide/true",
+        "/qp/slack",
+        "/command/motion",
+    ):
+        assert entity in found, entity
+    times, theta = zip(*found["/coordinates/theta_o_deg/true"], strict=True)
+    np.testing.assert_allclose(times, run["time"], atol=1e-9)
+    np.testing.assert_allclose(np.ravel(theta), np.rad2deg(run["true_coordinates"][:, 0]))
+    estimated = dict(found["/coordinates/s_h_mm/estimated"])
+    valid = run["est_kinematics_valid"]
+    assert len(estimated) == valid.sum()  # the estimate only where the kinematics are valid
+    _time, (strip,) = found["/scene/object"][10]
+    polygon = np.asarray(strip)[:-1]  # closed: the first vertex again
+    faces = np.linalg.norm(np.roll(polygon, -1, axis=0) - polygon, axis=1)
+    np.testing.assert_allclose(sorted(faces), [SIDE] * 4, atol=1e-6)  # the square of meta.json (float32)
+    assert polygon[:, 1].min() == pytest.approx(0.0, abs=1e-6)  # on the ground

@@ -53,6 +53,9 @@ def test_qp_region_writes_its_figures(tmp_path, motion):
         assert (tmp_path / name).stat().st_size > 10_000
     result = json.loads((tmp_path / "results.json").read_text())
     assert result["feasible"] and not result["region_empty"]
+    step, vertices = np.array(result["step"]), np.array(result["region_vertices"])  # one unit: SI
+    assert np.all(step >= vertices.min(axis=0) - 1e-9) and np.all(step <= vertices.max(axis=0) + 1e-9)
+    assert 0.0 < np.abs(step[:2]).max() < 0.005  # a tick moves the hand by millimetres, in m
 
 
 def test_qp_solution_lies_in_the_drawn_region():
@@ -78,9 +81,9 @@ def test_qp_solution_lies_in_the_drawn_region():
         ["feasibility", "--mu-hand", "-0.2,0.5"],
         ["feasibility", "--force-limits", "3"],
         ["gradients", "--points", "0"],
-        ["qp-region", "--wrench", "1,2"],
-        ["qp-region", "--motion", "fly"],
-        ["qp-region", "--mass", "-1"],
+        ["qp_region", "--wrench", "1,2"],
+        ["qp_region", "--motion", "fly"],
+        ["qp_region", "--mass", "-1"],
         ["no-such-study"],
     ],
 )
@@ -90,6 +93,7 @@ def test_bad_values_give_one_line_and_exit_2(argv, capsys):
     assert exit_info.value.code == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "error" in err
+    assert ("unknown study" in err) == (argv[0] == "no-such-study"), err  # the study's own check said it
 
 
 def test_out_must_be_a_folder(tmp_path, capsys):

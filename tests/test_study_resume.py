@@ -62,9 +62,11 @@ def test_an_interrupted_study_reruns_only_its_unfinished_trials(tmp_path, capsys
 def test_fresh_runs_every_trial_again(tmp_path):
     specs, out = make_specs(tmp_path, 3), tmp_path / "out"
     first = study(out, specs)
-    args = runner.study_parser("demo", "").parse_args(["--out", str(out), "--workers", "1", "--fresh"])
+    args = runner.study_parser("demo", "", "fewer trials").parse_args(
+        ["--out", str(out), "--workers", "1", "--fresh"]
+    )
     options = runner.RunOptions.from_args(args)
-    default = runner.RunOptions.from_args(runner.study_parser("demo", "").parse_args([]))
+    default = runner.RunOptions.from_args(runner.study_parser("demo", "", "fewer trials").parse_args([]))
     assert options.fresh and not default.fresh
     assert runner.run_study("study", logged_trial, specs, options) == first
     assert calls(tmp_path) == [0, 1, 2, 0, 1, 2]

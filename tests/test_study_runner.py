@@ -100,21 +100,31 @@ def test_write_results_tables_specs_and_results(tmp_path):
     results = [{"x": 1.5, "xs": [float("inf"), 2.0]}, {"error": "ValueError: no"}]
     runner.write_results(tmp_path, specs, results, {"total": np.float64(1.0)})
     saved = json.loads((tmp_path / "results.json").read_text())
-    assert saved["summary"] == {"total": 1.0}
+    assert saved["summary"] == {"total": 1.0} and "SI" in saved["units"]
     assert saved["trials"][0] == {
         "spec": {"seed": 1, "grid": [0.1, 0.2]},
         "result": {"x": 1.5, "xs": [None, 2.0]},
     }
     lines = (tmp_path / "results.csv").read_text().splitlines()
-    assert lines[0] == "seed,grid,x,xs,error"
-    assert lines[1] == '1,"[0.1, 0.2]",1.5,"[null, 2.0]",' and lines[2] == "2,[0.3],,,ValueError: no"
+    assert lines[0] == "seed,grid,x,xs,error"  # flat: a short list's items joined by ;
+    assert lines[1] == "1,0.1;0.2,1.5,;2.0," and lines[2] == "2,0.3,,,ValueError: no"
 
 
-def test_registry_names_importable_studies_with_main():
+def test_csv_rows_are_flat_nested_mappings_as_columns_and_long_series_left_to_the_json():
+    row = {"a": {"b": 1, "c": {"d": [1, 2]}}, "trace": list(range(100)), "causes": ["x", "y"], "e": None}
+    assert runner.csv_row(row) == {"a.b": 1, "a.c.d": "1;2", "causes": "x;y", "e": None}
+
+
+def test_every_listed_study_imports_with_a_main_and_the_helpers_are_not_listed():
     import importlib
 
-    for name, module in runner.study_modules().items():
-        assert callable(importlib.import_module(module).main), name
+    from ccopt.cliutil import scripts
+
+    found = scripts("studies")
+    assert "runner" not in found and "__main__" not in found and len(found) >= 7
+    for name, line in found.items():
+        module = importlib.import_module(f"studies.{name}")
+        assert callable(module.main) and module.__doc__.startswith(line) and line, name
 
 
 def test_unreachable_scheduler_is_one_line_exit_2(tmp_path, capsys, monkeypatch):
