@@ -1,16 +1,19 @@
 """How the robustness study scales with local worker processes.
 
-    python -m benchmarks.study_scaling [--quick] [--json PATH] [--seed N] [--workers N]
+    python -m benchmarks.study_scaling [--quick] [--json PATH] [--seed N] [--workers N] [--trials N]
 
-The same robustness trials (:mod:`studies.robustness`: random objects, the ``paper`` schedule, planar
-plant) run through :func:`studies.runner.run_trials` on 1 worker (in this process, as ``--workers 1``
-runs them) and on ``--workers`` spawned worker processes (2 by default), in one run; the speedup is
-the ratio of the two wall times, process start-up included. It can reach the worker count only if
-that many cores are free, so the load average before and after is reported (a shared machine's other
-work takes its share of the cores), and so is the CPU time each run used (this process and its
-workers): where the parallel run uses no more CPU than the serial one, the study itself scales and
-only the cores it was given limit the speedup (``cpu_bound_speedup``: the speedup had every worker
-had a core of its own, ``workers × serial CPU / parallel CPU``).
+The same robustness trials (:mod:`studies.robustness`: random objects, the ``paper`` schedule,
+planar plant; as many as the study runs by default, 50) run through
+:func:`studies.runner.run_trials` on 1 worker (in this process, as ``--workers 1`` runs them) and on
+``--workers`` spawned worker processes (2 by default), in one run; the speedup is the ratio of the
+two wall times, process start-up included. Each worker's start (0.4 s of imports, 0.3 s more for its
+first run) and the last trial that one worker finishes alone are paid once per study: fewer trials
+scale worse (8: ~1.6×). The speedup can reach the worker count only if that many cores are free, so
+the load average before and after is reported (a shared machine's other work takes its share of the
+cores), and so is the CPU time each run used (this process and its workers): where the parallel run
+uses no more CPU than the serial one, the study itself scales and only the cores it was given limit
+the speedup (``cpu_bound_speedup``: the speedup had every worker had a core of its own, ``workers ×
+serial CPU / parallel CPU``).
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ from collections.abc import Sequence
 
 from ccopt.cliutil import benchmark_parser, print_table, write_json
 from studies import runner
-from studies.robustness import draw_object, robustness_trial
+from studies.robustness import TRIALS, draw_object, robustness_trial
 
 
 def _cpu_seconds() -> float:
@@ -67,11 +70,12 @@ def run(trials: int, seed: int, workers: int) -> dict[str, float | int]:
 
 def main(argv: Sequence[str] | None = None) -> None:
     parser = benchmark_parser(
-        "study_scaling", __doc__, "6 trials instead of 16", seed="base seed of the trials"
+        "study_scaling", __doc__, f"8 trials instead of {TRIALS}", seed="base seed of the trials"
     )
     parser.add_argument("--workers", type=runner.positive_int, default=2, help="workers to compare with 1")
+    parser.add_argument("--trials", type=runner.positive_int, help=f"trials (default: {TRIALS}, --quick 8)")
     args = parser.parse_args(argv)
-    figures = run(6 if args.quick else 16, args.seed, args.workers)
+    figures = run(args.trials or (8 if args.quick else TRIALS), args.seed, args.workers)
     print(
         f"Robustness study, {figures['trials']} trials ({figures['cores']} cores; load average "
         f"{figures['load_before']:.2f} before, {figures['load_after']:.2f} after)"
