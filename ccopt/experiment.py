@@ -162,6 +162,7 @@ def run_feasibility_map(
         frame.forces,
         PlannerParams().margin,
         frame.vertex_range,
+        params.controller_params.slide_beyond,
     )
 
 

@@ -20,6 +20,7 @@ A run folder keeps the maps in ``feasibility_map.npz`` (SI: rad, m, N) and draws
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -128,18 +129,25 @@ def grid_around(theta_range: tuple[float, float], s_h: float) -> tuple[np.ndarra
 
 
 def margins(
-    statics_of, thetas: np.ndarray, s_hs: np.ndarray, lever: float, forces: tuple[float, float]
+    statics_of: Callable[[Motion], statics.ObjectStatics | None],
+    thetas: np.ndarray,
+    s_hs: np.ndarray,
+    lever: float,
+    forces: tuple[float, float],
+    slide_beyond: float = 0.0,
 ) -> np.ndarray:
     """Margins (k, n, m) of :data:`MOTIONS` over the grid, ``statics_of(motion)`` giving the statics
-    each motion is judged on (None: NaN everywhere)."""
+    each motion is judged on (None: NaN everywhere); ground slides judged ``slide_beyond`` (N) past
+    their row, as the planner judges them (:attr:`ccopt.planning.graph.GraphParams.slide_beyond`)."""
     out = np.full((len(MOTIONS), len(thetas), len(s_hs)), math.nan)
     for k, motion in enumerate(MOTIONS):
         known = statics_of(motion)
         if known is None:
             continue
+        beyond = slide_beyond if motion in (Motion.SLIDE_GROUND_POS, Motion.SLIDE_GROUND_NEG) else 0.0
         for i, theta in enumerate(thetas):
             for j, s_h in enumerate(s_hs):
-                out[k, i, j] = statics.best_wrench(known, theta, s_h, motion, lever, forces).margin
+                out[k, i, j] = statics.best_wrench(known, theta, s_h, motion, lever, forces, beyond).margin
     return out
 
 
@@ -153,12 +161,14 @@ def of_run(
     forces: tuple[float, float],
     min_margin: float,
     vertex_range: tuple[float, float],
+    slide_beyond: float = 0.0,
 ) -> FeasibilityMap:
     """The maps of a run: estimated at ``estimate`` (the last usable one; None: no estimated map),
     true on ``obj`` as ``start`` placed it, over ``theta_range`` (the robot's reach, rad) and
     ``s_h`` around the estimate's (or the start's); ``lever`` (m) and ``forces`` (N) as the planner
     judges. ``vertex_range`` is where the object stays on its start vertex (rad;
-    :func:`ccopt.planning.tour.vertex_range`)."""
+    :func:`ccopt.planning.tour.vertex_range`); the estimated ground slides are judged
+    ``slide_beyond`` (N) past their row, as the run's planner judged them."""
     truth = statics.true_statics(obj, start, hand)
     usable = estimate is not None and estimate.kinematics_valid
     centre = float(estimate.s_h) if usable else truth.s_h
@@ -166,7 +176,12 @@ def of_run(
     if usable:
         angle = float(estimate.theta_o)
         estimated = margins(
-            lambda motion: estimated_statics(estimate, angle, motion=motion), thetas, s_hs, lever, forces
+            lambda motion: estimated_statics(estimate, angle, motion=motion),
+            thetas,
+            s_hs,
+            lever,
+            forces,
+            slide_beyond,
         )
         at = (angle, centre)
     else:
@@ -222,9 +237,12 @@ def draw(fmap: FeasibilityMap, path: str | Path | None = None, title: str = "", 
         ax.set_xlabel(r"$\theta_o$ (deg)")
     figure.colorbar(image, ax=axes, shrink=0.6, label="statics margin (N)")
     figure.suptitle(
-        title or f"Feasibility maps (no paper figure: its future work), contour at {fmap.min_margin:g} N; "
-        "+ the estimate judged at",
-        fontsize=9,
+        title
+        or "Feasibility maps (no paper figure: the paper's future work, §VIII)\n"
+        f"statics margin of each motion, estimated (left) vs true (right); black contour at the "
+        f"planner's {fmap.min_margin:g} N;\n+ where the estimate was judged (the run's last usable "
+        "estimate); grey: not judged (estimate) or no such configuration (true)",
+        fontsize=8,
     )
     if path is not None:
         figure.savefig(path, dpi=dpi)
