@@ -32,7 +32,7 @@ from ccopt.control.targets import UNJUDGED, StaticsTarget, TargetGoal, statics_t
 from ccopt.estimation.estimator import Estimate, Estimator, EstimatorParams
 from ccopt.hand import Hand
 from ccopt.health import HealthParams, SensorHealth
-from ccopt.modes import MOTION_CODES
+from ccopt.modes import MOTION_CODES, HandGeometry
 from ccopt.objects import PlanarObject
 from ccopt.planning.planner import PlannerParams
 from ccopt.planning.sequencer import GoalResult, GoalSequencer, s_g_from
@@ -403,15 +403,22 @@ class _StepTracker:
         elif self.goal is not None and elapsed >= SLIDE_START_TIME and not self._started(coordinates):
             self.advance(now, estimate, hand_pose, "timeout", f"did not start within {SLIDE_START_TIME:g} s")
         elif self.goal is not None and self._rolled(now, estimate):
-            self.advance(now, estimate, hand_pose, "rolled", "the hand rolled: the object stopped pivoting")
+            self.advance(now, estimate, hand_pose, "rolled", _ROLL_REASONS[self.step.kind])
 
     def _rolled(self, now: float, estimate: Estimate) -> bool:
-        """Whether a pivot has seen the hand turned past the object (the estimate's hand geometry,
-        the sign of ``θ_o − θ_h``, opposite to the pivot's) for :data:`ROLL_TIME`: the object no
-        longer turns with the hand (it lies on another vertex or a face), and pressing on would only
-        roll the hand further. (The other sign, the object ahead of the hand, is a hand tipping over
-        the face's end while the object still turns.)"""
-        if self.step.kind != "pivot" or estimate.hand_geometry != -math.copysign(1.0, self.step.delta):
+        """Whether the hand has been seen off flush for :data:`ROLL_TIME` (the estimate's hand
+        geometry, the sign of ``θ_o − θ_h``). A pivot counts the sign opposite to its own: the object
+        no longer turns with the hand (it lies on another vertex or a face), and pressing on would
+        only roll the hand further (the other sign, the object ahead of the hand, is a hand tipping
+        over the face's end while the object still turns). A slide counts either sign: it keeps the
+        hand flush, so a hand on its edge is a slide becoming a roll, and the kinematics, which take
+        the hand as flush, would read the roll as the slide. The classifier is conservative (a
+        torque near the hand's limit reads as maybe rolling), so this ends a slide whose hand is
+        about to roll as well as one that rolled."""
+        rolled = estimate.hand_geometry != HandGeometry.FLUSH
+        if self.step.kind == "pivot":
+            rolled = estimate.hand_geometry == -math.copysign(1.0, self.step.delta)
+        if not rolled:
             self._rolled_since = None
             return False
         if self._rolled_since is None:
@@ -440,9 +447,16 @@ class _StepTracker:
 
 
 ROLL_TIME = 0.15
-"""s: a goal's pivot whose hand the estimate sees off flush this long ends ``rolled`` (a flush
+"""s: a goal's motion whose hand the estimate sees off flush this long ends ``rolled`` (a flush
 pivot's hand is classified flush; the paper square pressed flat on its face rolled the hand within
-0.1 s of the tilt where it landed)."""
+0.1 s of the tilt where it landed; a ground slide of the paper triangle tried at 2.7° with a bold
+``μ_h`` kept its hand on the face's end for 2.5 s, then rolled it and slid it 10 mm, which the
+kinematics read as the ground sliding)."""
+_ROLL_REASONS = {
+    "pivot": "the hand rolled: the object stopped pivoting",
+    "slide_hand": "the hand rolled (or was about to) on the face's end instead of sliding",
+    "slide_ground": "the hand rolled (or was about to) on the face's end instead of sliding the object",
+}
 SLIDE_START_TIME = 3.0
 """A goal's planned slide that has not started after this long (s) ends: where the estimated statics
 were too hopeful (a ground row never slid past is estimated inside the true one), the planner

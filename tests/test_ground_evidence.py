@@ -70,6 +70,26 @@ def test_a_side_once_seen_stays_seen():
     assert all(ways == (True, False) for ways in seen[1:])
 
 
+def test_a_hand_that_turns_while_s_h_moves_counts_only_what_the_turn_does_not_explain():
+    """The kinematics take the hand as flush, so a hand rolling by Δθ moves ``ŝ_h`` by about
+    ``d Δθ``. With the lever d = 0.16 m: 2.8 mm over a 1° roll (as on the paper triangle, d Δθ =
+    2.79 mm) is no slide; the same 2.8 mm at a steady angle is one; a hand that slides 9 mm while it
+    rolls 2° (as at the end of the paper rectangle's face: d Δθ = 5.6 mm) slid; an unknown lever
+    counts nothing while the hand moves."""
+    lever, one_degree = 0.16, math.radians(1.0)
+
+    def last(moves: float, turn: float, lever: float = lever) -> tuple[bool, bool]:
+        slides = SlideEvidence(DISTANCE)
+        seen = [slides.update(0.1 + moves * k / 10, 1, turn * k / 10, lever) for k in range(11)]
+        return seen[-1]
+
+    assert last(2.8e-3, one_degree) == (False, False)
+    assert last(2.8e-3, 0.0) == (True, False)
+    assert last(9e-3, 2 * one_degree) == (True, False)
+    assert last(9e-3, 2 * one_degree, math.nan) == (False, False)
+    assert last(-9e-3, -2 * one_degree) == (False, False)  # against the commanded way
+
+
 @pytest.mark.parametrize(
     ("distance", "error"),
     [
@@ -86,6 +106,7 @@ def test_the_slid_distance_must_be_a_positive_finite_number(distance, error):
         SlideEvidence(distance)
     with pytest.raises(error, match="slid_distance"):
         EstimatorParams(slid_distance=distance)
+
 
 
 # --- the ground hull: which straight edges are friction faces -------------------------------------

@@ -309,7 +309,7 @@ class Estimator:
             *parts,
             rough=self._rough(theta_o, kinematics),
             gravity=gravity,
-            slid=self._slid(commanded, kinematics),
+            slid=self._slid(commanded, kinematics, theta_h),
             hand_slid=any(self.hand_slides.slid),
         )
         return self._last
@@ -341,13 +341,13 @@ class Estimator:
         return out[:rows].reshape(3, N_CONE_ROWS).T, out[rows : rows + N_CONE_ROWS], out[rows + N_CONE_ROWS :]
 
     def _slid(
-        self, commanded: ContactConfiguration | None, kinematics: KinematicEstimate
+        self, commanded: ContactConfiguration | None, kinematics: KinematicEstimate, theta_h: float
     ) -> tuple[bool, bool]:
         """Update the slide evidence of both contacts; the ways the ground slid. Without a command
         the ground counts while the kinematics let it move; the hand does not count."""
         hand = commanded.hand_mode if commanded is not None else None
         ground = commanded.ground_mode if commanded is not None else None
-        self.hand_slides.update(kinematics.s_h, _sliding_way(hand))
+        self.hand_slides.update(kinematics.s_h, _sliding_way(hand), theta_h, kinematics.rough[0])
         free = None if not kinematics.ground_fixed else 0
         return self.ground_slides.update(kinematics.s_g, _sliding_way(ground, free))
 
@@ -387,8 +387,12 @@ def ground_friction_faces(
 class SlideEvidence:
     """Which ways a contact has been seen sliding: while it is meant to slide one way
     (:func:`_sliding_way`), its estimated position (``s_g`` or ``s_h``) moved by at least
-    ``distance`` (m) that way. The way counts: when the kinematics start following a sliding
-    ground, ``ŝ_g`` first jumps by up to a millimetre either way.
+    ``distance`` (m) that way, beyond what the hand's turn since explains. The way counts: when the
+    kinematics start following a sliding ground, ``ŝ_g`` first jumps by up to a millimetre either
+    way. The turn counts for the hand: the kinematics take a hand meant to slide as flush, so a hand
+    that rolls on the face's end by ``Δθ_h`` moves ``ŝ_h`` by about ``d̂ Δθ_h`` without sliding at
+    all (on the paper triangle, 2.8 mm over a 1° roll of a hand-slide probe, which froze ``μ̂_h`` at
+    0.20 against the true 0.5), while a hand that slides and rolls at once moves it further.
 
     Only on a side the ground slid is the hull face the ground's friction face; before, it is
     merely where the data end (e.g. the hand forces of pivots at a tilted hand lie along a straight
@@ -401,19 +405,25 @@ class SlideEvidence:
         self.slid = [False, False]
         """Per way: ``[+, −]`` (for the ground, rows ``GROUND_SLIDE_POS``, ``GROUND_SLIDE_NEG``)."""
         self._start = math.nan  # the position where the contact was last let move
+        self._angle = 0.0  # the hand's angle there
 
-    def update(self, position: float, way: int | None) -> tuple[bool, bool]:
-        """Advance with the current position estimate (m, NaN if unknown) and the way the contact is
-        meant to slide (``±1``, 0 not at all, None either way); the ways seen so far."""
+    def update(
+        self, position: float, way: int | None, angle: float = 0.0, lever: float = 0.0
+    ) -> tuple[bool, bool]:
+        """Advance with the current position estimate (m, NaN if unknown), the way the contact is
+        meant to slide (``±1``, 0 not at all, None either way), the hand's angle (rad) and the lever
+        (m) by which a turn of the hand moves ``position`` (NaN: unknown, nothing counts); the ways
+        seen so far."""
         if way == 0 or not math.isfinite(position):
             self._start = math.nan
         elif math.isnan(self._start):
-            self._start = position
+            self._start, self._angle = position, angle
         else:
             moved = position - self._start
-            if abs(moved) >= self.distance and (way is None or moved * way > 0.0):
+            needed = self.distance + abs(lever * (angle - self._angle))
+            if abs(moved) >= needed and (way is None or moved * way > 0.0):
                 self.slid[0 if moved > 0.0 else 1] = True
-                self._start = position
+                self._start, self._angle = position, angle
         return self.slid[0], self.slid[1]
 
 
