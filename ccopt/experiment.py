@@ -30,7 +30,7 @@ from ccopt.feasibility_map import FeasibilityMap
 from ccopt.objects import PlanarObject
 from ccopt.planning.planner import PlannerParams, oracle_plan
 from ccopt.planning.sequencer import GoalResult
-from ccopt.planning.tour import vertex_range
+from ccopt.planning.tour import Tour, plan_tour, vertex_range
 from ccopt.plant.base import StartConfig
 from ccopt.record import load_record, write_summary
 from ccopt.schedule import Schedule
@@ -104,6 +104,20 @@ def check_schedule(
     """The oracle's check of every step of ``schedule`` on the true ``obj`` as ``params`` start it."""
     start = closed_loop.start_config(obj, params)
     return statics.schedule_feasibility(obj, schedule.steps, start, params.hand)
+
+
+TOUR_SCHEDULE = "tour"
+"""The schedule name with which a study runs each object's :func:`experimenter_tour`."""
+
+
+def experimenter_tour(obj: PlanarObject, params: LoopParams) -> tuple[LoopParams, Tour]:
+    """The experimenter's schedule for ``obj`` (issue 10's scripted runs): the tour of pivots, hand
+    slides and ground slides that the statics on the *true* object allow with margin
+    (:func:`ccopt.planning.tour.plan_tour`), within the hand angles the plant of ``params`` reaches
+    (the Panda's are probed), with the loop parameters that start it. A study's tool: the estimator
+    and the controller never see what it knows."""
+    reach = closed_loop.make_plant(obj, params).hand_angle_range
+    return plan_tour(obj, params, tuple(reach))
 
 
 @dataclass(frozen=True)

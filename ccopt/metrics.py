@@ -308,13 +308,20 @@ def _run_inputs(result: RunResult, schedule: Schedule) -> tuple:
 
 @dataclass(frozen=True)
 class Thresholds:
-    """What a closed-loop run must achieve: error medians in deg and mm, the ratio band, no slips."""
+    """What a closed-loop run must achieve (issue 10's bar): error medians in deg and mm, the
+    overall ratio band, per kind of motion (where a kind ran) a median ratio band, the share of
+    samples with valid kinematics, the largest true normal force (N: the default hand's 25 N limit
+    plus 2 N of sensor noise and transients) and no slips."""
 
     theta_err_deg: float = 1.0
     s_h_err_mm: float = 3.0
     s_g_err_mm: float = 3.0
     ratio_low: float = 0.85
     ratio_high: float = 1.15
+    kind_ratio_low: float = 0.9
+    kind_ratio_high: float = 1.1
+    valid_share: float = 0.8
+    normal_force_max: float = 27.0
 
 
 def _at_most(value: float | None, limit: float) -> bool:
@@ -323,7 +330,8 @@ def _at_most(value: float | None, limit: float) -> bool:
 
 def misses(summary: Mapping[str, object], thresholds: Thresholds = Thresholds()) -> list[str]:
     """The thresholds a run misses: ``completed``, ``theta_err``, ``s_h_err``, ``s_g_err``, ``ratio``,
-    ``slips`` (an absent median misses)."""
+    ``ratio_<kind>`` (a kind of motion that ran), ``valid_share``, ``normal_force``, ``slips`` (an
+    absent median misses)."""
     ratio = summary["ratio_realised_commanded"]["median"]
     checks = {
         "completed": bool(summary["completed"]),
@@ -331,8 +339,15 @@ def misses(summary: Mapping[str, object], thresholds: Thresholds = Thresholds())
         "s_h_err": _at_most(summary["s_h_err_mm"]["median"], thresholds.s_h_err_mm),
         "s_g_err": _at_most(summary["s_g_err_mm"]["median"], thresholds.s_g_err_mm),
         "ratio": ratio is not None and thresholds.ratio_low <= ratio <= thresholds.ratio_high,
-        "slips": summary["unintended_slips"] == 0,
     }
+    for kind, quartile in summary["ratio_by_kind"].items():
+        median = quartile["median"]
+        in_band = median is None or thresholds.kind_ratio_low <= median <= thresholds.kind_ratio_high
+        checks[f"ratio_{kind}"] = in_band
+    share = summary["kinematics_valid_share"]
+    checks["valid_share"] = share is not None and share >= thresholds.valid_share
+    checks["normal_force"] = _at_most(summary["normal_force_n"]["max"], thresholds.normal_force_max)
+    checks["slips"] = summary["unintended_slips"] == 0
     return [name for name, met in checks.items() if not met]
 
 

@@ -55,9 +55,11 @@ import numpy as np
 from tqdm import tqdm
 
 from ccopt.cliutil import STOP_SIGNALS, OneLineParser, fail, seed_value, write_json
-from ccopt.closed_loop import RunResult
+from ccopt.closed_loop import LoopParams, RunResult
 from ccopt.config import UNITS
-from ccopt.schedule import load_schedule
+from ccopt.experiment import TOUR_SCHEDULE, experimenter_tour
+from ccopt.objects import PlanarObject
+from ccopt.schedule import Schedule, load_schedule
 
 Spec = Any
 """A trial spec: a dataclass instance or a dict, JSON-serialisable once through :func:`spec_dict`."""
@@ -531,8 +533,8 @@ def closed_loop_arguments(parser: argparse.ArgumentParser, schedule: str = "pape
     shared by the closed-loop studies; :func:`checked_schedule` reads the schedule chosen."""
     parser.add_argument(
         "--schedule",
-        help=f"built-in (paper, smoke) or a .yaml/.json file (default: {schedule}; "
-        f"with --quick: {QUICK_SCHEDULE})",
+        help=f"built-in (paper, smoke), a .yaml/.json file, or {TOUR_SCHEDULE}: each object's own tour of "
+        f"the motions its true statics allow (default: {schedule}; with --quick: {QUICK_SCHEDULE})",
     )
     parser.set_defaults(default_schedule=schedule)
     parser.add_argument(
@@ -540,10 +542,23 @@ def closed_loop_arguments(parser: argparse.ArgumentParser, schedule: str = "pape
     )
 
 
+def trial_run(obj: PlanarObject, schedule: str, params: LoopParams) -> tuple[Schedule, LoopParams]:
+    """The schedule and loop parameters of a trial of ``obj``: the schedule named (a built-in or a
+    file), or for :data:`~ccopt.experiment.TOUR_SCHEDULE` the object's own tour and the start it
+    needs (:func:`ccopt.experiment.experimenter_tour`)."""
+    if schedule == TOUR_SCHEDULE:
+        tour_params, tour = experimenter_tour(obj, params)
+        return tour.schedule, tour_params
+    return load_schedule(schedule), params
+
+
 def checked_schedule(prog: str, args: argparse.Namespace) -> str:
     """The schedule a closed-loop study's ``args`` choose (see :func:`closed_loop_arguments`), checked:
-    its name or file, or one line and exit 2."""
+    its name or file, or one line and exit 2; :data:`~ccopt.experiment.TOUR_SCHEDULE` is made per
+    object (:func:`trial_run`)."""
     name = args.schedule or (QUICK_SCHEDULE if args.quick else args.default_schedule)
+    if name == TOUR_SCHEDULE:
+        return name
     try:
         load_schedule(name)
     except ValueError as error:
