@@ -614,12 +614,18 @@ class _Loop:
         if self.estimate.kinematics_valid:
             self.last_usable = self.estimate
         self.hand_pose = pose if bool(np.all(np.isfinite(pose))) else None
+        if self._lost():  # a dropout: the target holds still from this reading on, not from the next
+            self.velocity[:] = 0.0  # control tick (up to a control period of ramping on the last step)
         if self.sensed % self.params.record_stride == 0:
             self._record(reading)
         self.sensed += 1
         health = self.health.update(time, pose, wrench, self.target)
         if not health.ok:
             self._stop("sensor_fault", health.message)
+
+    def _lost(self) -> bool:
+        """Whether the last reading was lost: no finite hand pose, or a sample the estimator skipped."""
+        return self.hand_pose is None or self.estimate.skipped
 
     def _record(self, reading: Measurement) -> None:
         """One record sample: this reading, the estimate, the command and the truth."""
@@ -631,8 +637,7 @@ class _Loop:
                 self.samples.setdefault(key, []).append(np.asarray(value))
 
     def _control(self) -> None:
-        if self.hand_pose is None or self.estimate.skipped:  # a dropout: the target holds still
-            self.velocity[:] = 0.0
+        if self._lost():  # a dropout: the target holds still (:meth:`_sense` stopped it)
             return
         if self._contact_lost():
             return

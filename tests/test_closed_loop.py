@@ -5,6 +5,7 @@ import pytest
 
 from ccopt import closed_loop, metrics, record
 from ccopt.objects import make_object
+from ccopt.plant.sensors import SensorParams, parse_fault
 from ccopt.schedule import load_schedule
 
 
@@ -89,3 +90,18 @@ def test_a_run_without_a_sample_is_summarised_with_the_same_keys_and_nothing_mea
     assert summary["theta_err_deg"]["median"] is None and summary["normal_force_n"]["max"] is None
     assert summary["ratio_by_kind"].keys() == measured["ratio_by_kind"].keys()
     assert summary["mode_confusion"].keys() == measured["mode_confusion"].keys()
+
+
+def test_the_target_holds_still_from_the_first_reading_a_dropout_loses():
+    """A reading without a pose or a wrench stops the target at once, not at the next control tick:
+    between two lost readings in a row the recorded target does not move (issue 12). Without the
+    fault the target moves between most pairs of readings, so the check can fail."""
+    faults = (parse_fault("dropout:0.3@0.5"),)
+    params = closed_loop.LoopParams(sensor_params=SensorParams(faults=faults))
+    result = closed_loop.run(make_object("paper-triangle"), load_schedule("smoke"), params, seed=1)
+    samples = result.samples
+    lost = ~(np.isfinite(samples["hand_pose"]).all(axis=1) & np.isfinite(samples["hand_wrench"]).all(axis=1))
+    moved = np.abs(np.diff(samples["target"], axis=0)).max(axis=1) > 0.0
+    in_a_row = lost[1:] & lost[:-1]
+    assert in_a_row.sum() > 20 and moved[~lost[1:] & ~lost[:-1]].mean() > 0.5
+    assert not moved[in_a_row].any(), samples["time"][1:][in_a_row & moved]
