@@ -16,6 +16,8 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import NoReturn
 
+from ccopt.validation import short
+
 MAX_SEED = 2**64
 """Seeds are integers in ``[0, MAX_SEED)``."""
 INTERRUPTED = 130
@@ -55,12 +57,6 @@ def seed_value(value: str) -> int:
     if not 0 <= number < MAX_SEED:
         raise argparse.ArgumentTypeError(f"seed must be an integer in [0, 2**64), got {short(value)}")
     return number
-
-
-def short(value: object, limit: int = 40) -> str:
-    """``repr(value)``, cut to ``limit`` characters (a 5,000-digit number named in one line)."""
-    text = repr(value)
-    return text if len(text) <= limit else f"{text[: limit - 12]}... ({len(text)} characters)"
 
 
 _stopping = threading.Event()

@@ -199,11 +199,11 @@ def _field(
         return convert[name](value)
     if isinstance(default, bool):
         if not isinstance(value, bool):
-            raise TypeError(f"must be true or false, got {value!r}")
+            raise TypeError(f"must be true or false, got {validation.short(value)}")
         return value
     if isinstance(default, int):
         if isinstance(value, bool) or not isinstance(value, int):
-            raise TypeError(f"must be an integer, got {value!r}")
+            raise TypeError(f"must be an integer, got {validation.short(value)}")
         return value
     if isinstance(default, float):
         return validation.real(name, value)
@@ -330,13 +330,13 @@ def _schedule(value: object) -> Schedule:
 
 def _seed(value: object) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < MAX_SEED:
-        raise ValueError(f"must be an integer in [0, 2**64), got {value!r}")
+        raise ValueError(f"must be an integer in [0, 2**64), got {validation.short(value)}")
     return value
 
 
 def _plant(value: object) -> str:
     if value not in ("planar", "panda"):
-        raise ValueError(f"must be 'planar' or 'panda', got {value!r}")
+        raise ValueError(f"must be 'planar' or 'panda', got {validation.short(value)}")
     return value
 
 

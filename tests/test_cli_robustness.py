@@ -84,6 +84,8 @@ def test_bad_values_are_one_line_exit_2_and_leave_no_folder(tmp_path, capsys, ar
         ("mixed.yaml", "1: one\nsteps: [{motion: hold}]\n", "unknown schedule key(s): 1"),
         ("mixed_step.yaml", "steps: [{motion: hold, 2: x, speed: 1}]\n", "unknown key(s) 2, speed"),
         ("binary.yaml", bytes(range(256)), "not a text file"),
+        ("long.yaml", f"steps: [{{motion: {'x' * 5000}}}]", "unknown motion 'xxx"),
+        ("long_value.yaml", f"steps: [{{motion: hold, duration_s: {'9' * 4000}x}}]", "duration_s"),
     ],
 )
 def test_bad_schedule_files_name_the_file(tmp_path, capsys, name, content, named):
