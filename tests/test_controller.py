@@ -127,3 +127,30 @@ def test_bad_parameters_raise():
         Controller(Hand(force_limits=(15.0, 25.0)), params=ControllerParams(normal_force=10.0))
     with pytest.raises(ValueError, match="period"):
         Controller(period=0.0)
+
+
+class BrokenSolver:
+    """A QP back end that fails as a numerical solver can: a step of NaN or infinity."""
+
+    backend = "broken"
+
+    def __init__(self, value: float) -> None:
+        self.value = value
+
+    def solve(self, instance):
+        from ccopt.control.qp import QPSolution
+
+        bad = np.full(3, self.value)
+        return QPSolution(bad, bad, self.value, False, self.backend)
+
+
+@pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
+def test_a_step_the_solver_got_wrong_holds_the_target_and_is_flagged_infeasible(value):
+    """Issue 12: the controller checks that the solver's step is finite. It returns no motion (the
+    target holds) and a solution flagged infeasible, never a NaN the plant would be driven with."""
+    broken = Controller(params=ControllerParams(), solver=BrokenSolver(value))
+    current = state()
+    output = broken.update(current, Command(Motion.PIVOT, np.array([THETA + 0.1, S_H, S_G])))
+    np.testing.assert_array_equal(output.step, np.zeros(3))
+    assert not output.solution.feasible and output.solution.slack == np.inf
+    np.testing.assert_array_equal(output.solution.wrench_change, np.zeros(3))

@@ -230,6 +230,12 @@ class ControlOutput:
     instance: QPInstance
 
 
+def _failed(solution: QPSolution) -> QPSolution:
+    """A solver's answer that is not a finite step, as the controller reports it: no step, no wrench
+    change, infinite slack, infeasible."""
+    return QPSolution(np.zeros(3), np.zeros(3), math.inf, False, solution.backend)
+
+
 class _Terms:
     """The tracking terms ``α (dᵀΔx − δ)²`` of one QP, collected in order."""
 
@@ -309,10 +315,17 @@ class Controller:
         return self._units.copy()
 
     def update(self, state: ControlInput, command: Command) -> ControlOutput:
-        """The hand-frame change of the impedance target ``(Δn, Δt, Δθ)`` (m, m, rad) for this tick."""
+        """The hand-frame change of the impedance target ``(Δn, Δt, Δθ)`` (m, m, rad) for this tick.
+
+        A step the solver returns that is not finite gives no change (the target holds) and a
+        solution flagged infeasible with infinite slack: never a NaN for the plant."""
         instance = self.build_instance(state, command)
         solution = self.solver.solve(instance)
         step = self._units * solution.step  # the QP's variable is the step in task units
+        if not all(map(math.isfinite, step.tolist())):  # the solver failed: no motion this tick
+            return validation.trusted(
+                ControlOutput, {"step": np.zeros(3), "solution": _failed(solution), "instance": instance}
+            )
         excess = max(map(truediv, map(abs, step.tolist()), self._max_step_list))
         step = step / excess if excess > 1.0 else step  # scaled, not clipped: the step keeps its
         # direction, and with it the balance of the wrench it predicts
