@@ -104,7 +104,7 @@ def read_file(path: str | Path) -> dict[str, object]:
     try:
         content = json.loads(raw) if text.lower().endswith(".json") else yaml.safe_load(raw)
     except (ValueError, RecursionError, yaml.YAMLError) as error:
-        reason = str(error).splitlines()[0] if str(error) else type(error).__name__
+        reason = validation.parse_reason(error)
         raise ValueError(f"settings file {text!r} is malformed: {reason}") from None
     if not isinstance(content, dict):
         raise ValueError(f"settings file {text!r} must hold a mapping, got {type(content).__name__}")

@@ -44,7 +44,7 @@ import yaml
 
 from ccopt import modes
 from ccopt.modes import KINDS, Kind, Motion
-from ccopt.validation import short
+from ccopt.validation import parse_reason, short
 
 PIVOT_STEP = np.deg2rad(7.2)
 SLIDE_STEP = 0.010
@@ -354,7 +354,7 @@ def load_schedule(name_or_path: str | Path) -> Schedule:
     try:
         content = json.loads(raw) if path.suffix.lower() == ".json" else yaml.safe_load(raw)
     except (ValueError, RecursionError, yaml.YAMLError) as error:  # ValueError: a number of 5,000 digits
-        reason = str(error).splitlines()[0] if str(error) else type(error).__name__
+        reason = parse_reason(error)
         raise ValueError(f"schedule file {text!r} is malformed: {reason}") from None
     try:
         return schedule_from_dict(content, default_name=path.stem)

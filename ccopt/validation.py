@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import sys
 from collections.abc import Iterable
 from numbers import Real
 from typing import TypeVar
@@ -23,6 +24,15 @@ def short(value: object, limit: int = 40) -> str:
     """``repr(value)``, cut to ``limit`` characters (a 5,000-digit number named in one line)."""
     text = repr(value)
     return text if len(text) <= limit else f"{text[: limit - 12]}... ({len(text)} characters)"
+
+
+def parse_reason(error: Exception) -> str:
+    """Why a JSON or YAML parser refused a file, in one line and in a user's words: Python's own
+    limit on the digits of an integer is named, not its advice to raise it."""
+    text = str(error)
+    if "integer string conversion" in text:
+        return f"a number of over {sys.get_int_max_str_digits()} digits"
+    return text.splitlines()[0] if text else type(error).__name__
 
 
 def as_float(name: str, value: Real) -> float:

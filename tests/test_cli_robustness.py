@@ -77,7 +77,8 @@ def test_bad_values_are_one_line_exit_2_and_leave_no_folder(tmp_path, capsys, ar
     ("name", "content", "named"),
     [
         ("huge.yaml", f"steps: [{{motion: pivot, delta_deg: {10**400}}}]", "beyond 1.8e308"),
-        ("digits.json", '{"steps": [{"motion": "pivot", "delta_deg": ' + "9" * 5000 + "}]}", "malformed"),
+        ("digits.json", '{"steps": [{"motion": "pivot", "delta_deg": ' + "9" * 5000 + "}]}", "4300 digits"),
+        ("digits.yaml", "steps: [{motion: pivot, delta_deg: " + "9" * 5000 + "}]", "over 4300 digits"),
         ("big.json", '{"steps": [{"motion": "pivot", "delta_deg": 1e200}]}', "at most 3.142 rad"),
         ("hold.json", '{"steps": [{"motion": "hold", "duration_s": 1e300}]}', "(0, 3600] s"),
         ("nan.json", '{"steps": [{"motion": "hold", "duration_s": NaN}]}', "finite"),

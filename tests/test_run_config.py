@@ -176,3 +176,16 @@ def test_a_huge_integer_in_a_file_is_one_short_line_naming_it(tmp_path, capsys, 
     assert len(lines) == 1 and "Traceback" not in captured.err, captured.err
     line = lines[0]
     assert line.startswith(f"ccopt run: error: {path[0]}") and path[-1] in line and len(line) < 300, line
+
+
+@pytest.mark.parametrize("name", ["digits.yaml", "digits.json"])
+def test_a_number_of_more_digits_than_python_reads_is_named_in_the_users_words(tmp_path, capsys, name):
+    """Not Python's advice to call ``sys.set_int_max_str_digits()``."""
+    file = tmp_path / name
+    digits = "9" * 5000
+    file.write_text(f"seed: {digits}" if name.endswith(".yaml") else f'{{"seed": {digits}}}')
+    with pytest.raises(SystemExit) as ended:
+        cli.main(["run", "--config", str(file), "--no-progress", "--out", str(tmp_path / "run")])
+    assert ended.value.code == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert str(file) in line and "a number of over 4300 digits" in line and "sys." not in line, line
