@@ -295,7 +295,7 @@ def _command_run(args: argparse.Namespace, prog: str) -> int:
     folder, created = Path(args.out), record.missing_folders(args.out)
     try:
         try:
-            record.prepare_folder(folder, overwrite=args.overwrite)
+            record.prepare_folder(args.out, overwrite=args.overwrite)  # named as given
         except ValueError as error:
             fail(prog, str(error))
         done = run_with_progress(experiment, obj, schedule, params, seed, args, folder)
