@@ -158,6 +158,22 @@ def test_the_current_directory_is_no_run_folder(tmp_path, capsys, monkeypatch, o
 # --- faults and time limits -----------------------------------------------------------------------
 
 
+def test_a_run_that_ends_without_reaching_its_steps_exits_3(tmp_path, capsys):
+    """Issue 12's exit status: 3 when the run ended early, goals or steps not reached too. A pivot
+    of 30° given 0.3 s ends 'timeout' (the loop's own verdict); the same schedule with the time to
+    do it exits 0, so the check can tell them apart."""
+    short, enough = tmp_path / "short.yaml", tmp_path / "enough.yaml"
+    short.write_text("steps: [{motion: pivot, delta_deg: 30, timeout_s: 0.3}]\n")
+    enough.write_text("steps: [{motion: pivot, delta_deg: 7.2, timeout_s: 8}]\n")
+    common = ["run", "--no-figures", "--no-progress", "--schedule"]
+    assert cli.main([*common, str(short), "--out", str(tmp_path / "a")]) == 3
+    err = [line for line in capsys.readouterr().err.splitlines() if not line.startswith("warning:")]
+    assert err == ["ccopt run: not done: 1 of 1 motion steps not reached (step 1 timeout)"]
+    assert record.load_record(tmp_path / "a").meta["status"] == "completed"
+    assert cli.main([*common, str(enough), "--out", str(tmp_path / "b")]) == 0
+    assert "not done" not in capsys.readouterr().err
+
+
 def test_a_fault_from_the_command_line_ends_the_run_as_a_sensor_fault(tmp_path, capsys):
     out = tmp_path / "run"
     code = cli.main(["run", *QUICK, "--fault", "dead-ft@0.5", "--fault", "spikes-ft:5", "--out", str(out)])
