@@ -663,7 +663,7 @@ class _Loop:
         output = self.controller.update(control_input(estimate, hand_pose, coordinates, aim), tracker.command)
         self.last_solution = (output.solution.slack, output.solution.feasible)
         self.velocity = geometry.twist_hand_to_world(hand_pose[2], output.step) / self.controller.period
-        self._check_solved(math.isinf(output.solution.slack))
+        self._check_solved(not output.solved)
         if self.on_tick is not None:
             self.on_tick(self.plant.time, tracker.index, len(self.schedule.steps))
 
