@@ -12,8 +12,9 @@ contacts (``--mu-hand`` and ``--mu-ground`` positive); objects have faces of 1 c
 
 ``ccopt run`` writes into a new or empty ``--out``; ``--overwrite`` first clears a previous run's
 files from it, and only those. Its exit status says how the run ended (:data:`EXIT_CODES`): 0
-completed, 3 ended early (``contact_lost``, ``sensor_fault``, ``timeout``, each with its one-line
-reason on stderr), 1 an error inside the run (its one-line message), 2 bad input, 130 interrupted.
+completed, 3 ended early (``contact_lost``, ``sensor_fault``, ``timeout``) or not done (motion steps
+or goals not reached, :func:`not_done`), each with its one-line reason on stderr, 1 an error inside
+the run (its one-line message), 2 bad input, 130 interrupted.
 Ctrl-C, SIGTERM and SIGHUP stop a run with its record closed (status ``interrupted``, no figures);
 a second one ends the program at once and quietly. Interrupted while starting, a run leaves no
 folder; interrupted while drawing, no figure cut short.
@@ -199,8 +200,9 @@ def _run_parser(commands: argparse._SubParsersAction) -> None:
         help="manipulate an unknown object through a schedule",
         description="Manipulate an unknown object through a schedule. Settings come from the defaults, "
         "then --config FILE, then the flags given (degrees and mm at the command line, SI in files).",
-        epilog="exit status: 0 completed, 3 ended early (contact_lost, sensor_fault, timeout), "
-        "1 error in the run, 2 bad input, 130 interrupted (Ctrl-C, SIGTERM, SIGHUP)",
+        epilog="exit status: 0 completed, 3 ended early (contact_lost, sensor_fault, timeout) or not done "
+        "(motion steps or goals not reached), 1 error in the run, 2 bad input, 130 interrupted (Ctrl-C, "
+        "SIGTERM, SIGHUP)",
     )
     run.add_argument(
         "--config",
@@ -295,7 +297,7 @@ def _command_run(args: argparse.Namespace, prog: str) -> int:
     folder, created = Path(args.out), record.missing_folders(args.out)
     try:
         try:
-            record.prepare_folder(folder, overwrite=args.overwrite)
+            record.prepare_folder(args.out, overwrite=args.overwrite)  # named as given
         except ValueError as error:
             fail(prog, str(error))
         done = run_with_progress(experiment, obj, schedule, params, seed, args, folder)
@@ -312,12 +314,35 @@ def _command_run(args: argparse.Namespace, prog: str) -> int:
     if status == "interrupted":
         sys.stderr.write(f"{prog}: interrupted; the record so far is in {folder} (ccopt plot draws it)\n")
         return INTERRUPTED
+    undone = not_done(done.result.steps, done.summary) if status == "completed" else ""
     if status != "completed":
         sys.stderr.write(f"{prog}: {status}: {message}\n")
+    elif undone:
+        sys.stderr.write(f"{prog}: not done: {undone}\n")
     loaded = record.load_record(folder)
     if args.figures and loaded.data:
         draw_figures(loaded, folder, prog)
-    return EXIT_CODES[status]
+    return EXIT_NOT_DONE if undone else EXIT_CODES[status]
+
+
+def not_done(steps: Sequence, summary: dict) -> str:
+    """What a run that ran to its end left undone, by the loop's own verdicts (not the truth): the
+    schedule's motion steps not reached (exploration probes aside) and the goals neither reached nor
+    found unreachable, in one line; "" if nothing."""
+
+    def listed(names: list[str]) -> str:
+        return ", ".join(names[:3]) + (", …" if len(names) > 3 else "")
+
+    parts = []
+    missed = [step for step in steps if step.goal is None and not step.explore and not step.reached]
+    if missed:
+        names = [f"step {step.index + 1} {step.status}" for step in missed]
+        parts.append(f"{len(missed)} of {summary['steps_total']} motion steps not reached ({listed(names)})")
+    goals = [goal for goal in summary["goals"] if goal["status"] not in ("reached", "unreachable")]
+    if goals:
+        names = [f"#{goal['index']} {goal['status']}" for goal in goals]
+        parts.append(f"{len(goals)} of {summary['goals_total']} goals not reached ({listed(names)})")
+    return "; ".join(parts)
 
 
 def _run_failed(prog: str, folder: Path, created: list[Path], error: Exception) -> int:
@@ -419,6 +444,8 @@ EXIT_CODES = {
     "interrupted": 130,
 }
 """How ``ccopt run`` exits, by how the run ended (bad input exits 2 before any run)."""
+EXIT_NOT_DONE = 3
+"""Exit status of a run that ran to its end without doing all it was asked (:func:`not_done`)."""
 
 
 def print_summary(summary: dict, folder: Path) -> None:

@@ -5,16 +5,19 @@ from __future__ import annotations
 
 import argparse
 import ast
+import contextlib
 import importlib.util
 import json
+import os
 import pkgutil
 import signal
 import sys
 import threading
 from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
 from pathlib import Path
 from typing import NoReturn
+
+from ccopt.validation import short
 
 MAX_SEED = 2**64
 """Seeds are integers in ``[0, MAX_SEED)``."""
@@ -57,22 +60,19 @@ def seed_value(value: str) -> int:
     return number
 
 
-def short(value: object, limit: int = 40) -> str:
-    """``repr(value)``, cut to ``limit`` characters (a 5,000-digit number named in one line)."""
-    text = repr(value)
-    return text if len(text) <= limit else f"{text[: limit - 12]}... ({len(text)} characters)"
-
-
 _stopping = threading.Event()
 """Set by the first stop signal: the program is on its way out."""
 
 
-@contextmanager
+@contextlib.contextmanager
 def stop_signals(prog: str) -> Iterator[None]:
     """Within: SIGTERM and SIGHUP stop the program as Ctrl-C does, by ``KeyboardInterrupt`` in the main
     thread (a run then closes its record). Once one of the three has come, the next one ends the
     program at once and quietly: ``prog: ...`` on one line and exit status :data:`INTERRUPTED`, no
-    traceback; so that this holds to the end, the handlers are then left in place.
+    traceback; so that this holds to the end, the handlers are then left in place. It ends the
+    process outright (``os._exit``, after flushing stdout and stderr): an exception raised from the
+    handler could be lost, as when CasADi runs the handlers from its C++ code and raises its own
+    ``KeyboardInterrupt`` in place of theirs.
 
     Outside the main thread (where handlers cannot be set) it changes nothing.
     """
@@ -83,7 +83,10 @@ def stop_signals(prog: str) -> Iterator[None]:
     def handle(signum: int, frame: object) -> None:
         if _stopping.is_set():
             sys.stderr.write(f"{prog}: {signal.Signals(signum).name} again: stopping now\n")
-            raise SystemExit(INTERRUPTED)
+            for stream in (sys.stdout, sys.stderr):
+                with contextlib.suppress(OSError, ValueError):  # a closed pipe, a closed stream
+                    stream.flush()
+            os._exit(INTERRUPTED)
         _stopping.set()
         raise KeyboardInterrupt
 

@@ -486,6 +486,8 @@ class Supervision:
             (:mod:`ccopt.health`). The hand's inertia makes the two differ while it accelerates: up to
             6 N for 50 ms when a steeply tilted object slipped on the ground (measured on a hexagon
             at 55°), 1.6 N on quiet runs.
+        solver_grace: the QP solver may give no finite step this long in a row (the target holds)
+            before the run ends with status ``error``.
     """
 
     contact_force: float = 1.0
@@ -496,11 +498,12 @@ class Supervision:
     min_time: float = 10.0
     health_tolerance: float = 6.0
     health_hold: float = 0.1
+    solver_grace: float = 0.2
     max_time: float | None = None
 
     def __post_init__(self) -> None:
         names = ("contact_force", "contact_grace", "recontact_speed", "recontact_distance")
-        for name in (*names, "time_factor", "min_time", "health_tolerance", "health_hold"):
+        for name in (*names, "time_factor", "min_time", "health_tolerance", "health_hold", "solver_grace"):
             validation.positive(name, getattr(self, name))
         if self.max_time is not None and not 0.0 < validation.real("max_time", self.max_time) <= 1e6:
             raise ValueError(f"max_time must be in (0, 1e6] s, got {self.max_time!r}")
@@ -578,6 +581,8 @@ class _Loop:
         self.hand_pose: np.ndarray | None = None
         self.lost_since: float | None = None
         self.lost_pose: np.ndarray | None = None
+        self.unsolved_since: float | None = None
+        """When the QP solver last began to give no finite step (None while it gives one)."""
         self.status = "completed"
         self.message = ""
 
@@ -628,12 +633,18 @@ class _Loop:
         if self.estimate.kinematics_valid:
             self.last_usable = self.estimate
         self.hand_pose = pose if bool(np.all(np.isfinite(pose))) else None
+        if self._lost():  # a dropout: the target holds still from this reading on, not from the next
+            self.velocity[:] = 0.0  # control tick (up to a control period of ramping on the last step)
         if self.sensed % self.params.record_stride == 0:
             self._record(reading)
         self.sensed += 1
         health = self.health.update(time, pose, wrench, self.target)
         if not health.ok:
             self._stop("sensor_fault", health.message)
+
+    def _lost(self) -> bool:
+        """Whether the last reading was lost: no finite hand pose, or a sample the estimator skipped."""
+        return self.hand_pose is None or self.estimate.skipped
 
     def _record(self, reading: Measurement) -> None:
         """One record sample: this reading, the estimate, the command and the truth."""
@@ -645,8 +656,7 @@ class _Loop:
                 self.samples.setdefault(key, []).append(np.asarray(value))
 
     def _control(self) -> None:
-        if self.hand_pose is None or self.estimate.skipped:  # a dropout: the target holds still
-            self.velocity[:] = 0.0
+        if self._lost():  # a dropout: the target holds still (:meth:`_sense` stopped it)
             return
         if self._contact_lost():
             return
@@ -667,8 +677,21 @@ class _Loop:
         output = self.controller.update(control_input(estimate, hand_pose, coordinates, aim), tracker.command)
         self.last_solution = (output.solution.slack, output.solution.feasible)
         self.velocity = geometry.twist_hand_to_world(hand_pose[2], output.step) / self.controller.period
+        self._check_solved(not output.solved)
         if self.on_tick is not None:
             self.on_tick(self.plant.time, tracker.index, len(self.schedule.steps))
+
+    def _check_solved(self, failed: bool) -> None:
+        """End the run (``error``) once the QP solver has given no finite step for ``solver_grace``:
+        the controller holds the target on such a tick (:meth:`Controller.update`), which would
+        otherwise go on until the time limit."""
+        now = self.plant.time
+        if not failed:
+            self.unsolved_since = None
+        elif self.unsolved_since is None:
+            self.unsolved_since = now
+        elif now - self.unsolved_since >= self.params.supervision.solver_grace:
+            self._stop("error", f"the QP solver gave no finite step from t = {self.unsolved_since:.2f} s on")
 
     def _aim(self, estimate: Estimate, hand_pose: np.ndarray) -> StaticsTarget:
         """The estimated statics' target of the command: evaluated afresh at a step's start and once

@@ -104,7 +104,7 @@ def read_file(path: str | Path) -> dict[str, object]:
     try:
         content = json.loads(raw) if text.lower().endswith(".json") else yaml.safe_load(raw)
     except (ValueError, RecursionError, yaml.YAMLError) as error:
-        reason = str(error).splitlines()[0] if str(error) else type(error).__name__
+        reason = validation.parse_reason(error)
         raise ValueError(f"settings file {text!r} is malformed: {reason}") from None
     if not isinstance(content, dict):
         raise ValueError(f"settings file {text!r} must hold a mapping, got {type(content).__name__}")
@@ -199,11 +199,11 @@ def _field(
         return convert[name](value)
     if isinstance(default, bool):
         if not isinstance(value, bool):
-            raise TypeError(f"must be true or false, got {value!r}")
+            raise TypeError(f"must be true or false, got {validation.short(value)}")
         return value
     if isinstance(default, int):
         if isinstance(value, bool) or not isinstance(value, int):
-            raise TypeError(f"must be an integer, got {value!r}")
+            raise TypeError(f"must be an integer, got {validation.short(value)}")
         return value
     if isinstance(default, float):
         return validation.real(name, value)
@@ -330,13 +330,13 @@ def _schedule(value: object) -> Schedule:
 
 def _seed(value: object) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < MAX_SEED:
-        raise ValueError(f"must be an integer in [0, 2**64), got {value!r}")
+        raise ValueError(f"must be an integer in [0, 2**64), got {validation.short(value)}")
     return value
 
 
 def _plant(value: object) -> str:
     if value not in ("planar", "panda"):
-        raise ValueError(f"must be 'planar' or 'panda', got {value!r}")
+        raise ValueError(f"must be 'planar' or 'panda', got {validation.short(value)}")
     return value
 
 

@@ -20,6 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ccopt import geometry
+from ccopt.validation import as_float, short
 
 MIN_EDGE = 0.01
 MAX_EDGE = 1.0
@@ -37,8 +38,8 @@ PAPER_ADDED_MASS = 0.5
 
 def _check_real(name: str, value: object) -> float:
     if isinstance(value, bool) or not isinstance(value, Real):
-        raise TypeError(f"{name} must be a real number, got {type(value).__name__} {value!r}")
-    return float(value)
+        raise TypeError(f"{name} must be a real number, got {type(value).__name__} {short(value)}")
+    return as_float(name, value)
 
 
 def _check_friction(name: str, value: object) -> float:
@@ -52,8 +53,11 @@ def _check_vertices(vertices: object) -> np.ndarray:
     """Validated ``(n, 2)`` CCW vertices shifted to the area centroid (read-only copy)."""
     try:
         poly = np.array(vertices, dtype=float)
+    except OverflowError:  # an integer beyond the largest float, from a settings file
+        beyond = f"an integer beyond 1.8e308 in {short(vertices)}"
+        raise ValueError(f"vertices must be finite, got {beyond}") from None
     except (TypeError, ValueError) as exc:
-        raise TypeError(f"vertices must be an (n, 2) array of numbers, got {vertices!r}") from exc
+        raise TypeError(f"vertices must be an (n, 2) array of numbers, got {short(vertices)}") from exc
     if poly.ndim != 2 or poly.shape[1] != 2:
         raise ValueError(f"vertices must have shape (n, 2), got shape {poly.shape}")
     if poly.shape[0] < 3:
@@ -157,9 +161,9 @@ class PlanarObject:
     def face_index(self, face: int) -> int:
         """``face`` validated against this object (raises ``TypeError``/``ValueError``)."""
         if isinstance(face, bool) or not isinstance(face, int | np.integer):
-            raise TypeError(f"face must be an integer, got {type(face).__name__} {face!r}")
+            raise TypeError(f"face must be an integer, got {type(face).__name__} {short(face)}")
         if not 0 <= face < self.n_faces:
-            raise ValueError(f"face must be in [0, {self.n_faces - 1}] for {self.name}, got {face}")
+            raise ValueError(f"face must be in [0, {self.n_faces - 1}] for {self.name}, got {short(face)}")
         return int(face)
 
 

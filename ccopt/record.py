@@ -39,12 +39,16 @@ CHUNKS = "chunks"
 RUN_ID_KEY = "__run_id__"
 """Key of the ``run_id`` in every chunk and in ``record.npz`` (not a data key)."""
 RUN_FILES = frozenset(
-    {"meta.json", "summary.json", "record.npz", "record.partial.npz", ".write_probe", "feasibility_map.npz"}
-)
-"""Files of a run folder that ``prepare_folder(..., overwrite=True)`` may remove, besides
-:data:`RUN_SUFFIXES` and the chunks."""
-RUN_SUFFIXES = (".png", ".gif", ".partial")
-"""Suffixes of the other files a run writes: figures, the animation, JSON being replaced."""
+    {
+        "meta.json", "summary.json", "record.npz", "feasibility_map.npz",  # the record
+        "meta.partial", "summary.partial", "record.partial.npz", "feasibility_map.npz.partial",
+        ".write_probe",  # files being written, the probe of a writable folder
+        "estimation.png", "friction_cones.png", "control.png", "animation.gif",  # figures
+        "feasibility_map.png",
+    }
+)  # fmt: skip
+"""The files a run and its figures write in a run folder (besides the chunks), by name: what
+``prepare_folder(..., overwrite=True)`` may remove. Any other file, a ``photo.png`` too, is the user's."""
 _CHUNK = re.compile(r"chunk_(\d+)\.npz")
 _CHUNK_FILE = re.compile(r"chunk_\d+(\.partial)?\.npz")
 
@@ -53,9 +57,9 @@ def prepare_folder(folder: str | Path, overwrite: bool = False) -> Path:
     """Make ``folder`` ready for a new run and return it: created if needed, and writable.
 
     The folder must be new or empty. With ``overwrite``, the files a run writes (:data:`RUN_FILES`,
-    :data:`RUN_SUFFIXES`, ``chunks/chunk_*.npz``) are removed first, and anything else in it is
-    refused. ``ValueError`` with one line naming the value or the file otherwise: an empty path, the
-    current directory, a path that is not a folder, an unwritable folder. Nothing is created or
+    ``chunks/chunk_*.npz``) are removed first, and a folder holding anything else is refused.
+    ``ValueError`` with one line naming the value or the file otherwise: an empty path, the current
+    directory, a path that is not a folder, an unwritable folder. Nothing is created or
     removed when it raises.
     """
     text = os.fspath(folder)
@@ -146,7 +150,7 @@ def _previous_run_files(path: Path, overwrite: bool) -> list[Path]:
         )
     chunks = sorted((path / CHUNKS).iterdir()) if (path / CHUNKS).is_dir() else []
     files = [entry for entry in entries if entry.name != CHUNKS or not entry.is_dir()]
-    foreign = [entry for entry in files if not (entry.is_file() and _written_by_a_run(entry.name))]
+    foreign = [entry for entry in files if not (entry.is_file() and entry.name in RUN_FILES)]
     foreign += [chunk for chunk in chunks if not (chunk.is_file() and _CHUNK_FILE.fullmatch(chunk.name))]
     if foreign:
         raise ValueError(
@@ -154,10 +158,6 @@ def _previous_run_files(path: Path, overwrite: bool) -> list[Path]:
             "move it away or choose another folder"
         )
     return files + chunks
-
-
-def _written_by_a_run(name: str) -> bool:
-    return name in RUN_FILES or name.endswith(RUN_SUFFIXES)
 
 
 def versions() -> dict[str, str]:

@@ -44,6 +44,7 @@ import yaml
 
 from ccopt import modes
 from ccopt.modes import KINDS, Kind, Motion
+from ccopt.validation import parse_reason, short
 
 PIVOT_STEP = np.deg2rad(7.2)
 SLIDE_STEP = 0.010
@@ -353,7 +354,7 @@ def load_schedule(name_or_path: str | Path) -> Schedule:
     try:
         content = json.loads(raw) if path.suffix.lower() == ".json" else yaml.safe_load(raw)
     except (ValueError, RecursionError, yaml.YAMLError) as error:  # ValueError: a number of 5,000 digits
-        reason = str(error).splitlines()[0] if str(error) else type(error).__name__
+        reason = parse_reason(error)
         raise ValueError(f"schedule file {text!r} is malformed: {reason}") from None
     try:
         return schedule_from_dict(content, default_name=path.stem)
@@ -383,7 +384,7 @@ _FIELDS = {
 def _steps_from_dict(index: int, entry: object) -> tuple[Step, ...]:
     where = f"step {index + 1}"
     if not isinstance(entry, dict) or "motion" not in entry:
-        raise ValueError(f"{where}: expected a mapping with a 'motion' key, got {entry!r}")
+        raise ValueError(f"{where}: expected a mapping with a 'motion' key, got {short(entry)}")
     kind = entry["motion"]
     if kind == "explore":
         _only(entry, {"motion", "pivot_deg", "probe_mm", "timeout_s"}, where)
@@ -400,10 +401,10 @@ def _steps_from_dict(index: int, entry: object) -> tuple[Step, ...]:
         return (_goal_from_dict(where, entry),)
     if kind not in KINDS:
         choices = ", ".join((*KINDS, "explore", Goal.kind))
-        raise ValueError(f"{where}: unknown motion {kind!r}; expected one of: {choices}")
+        raise ValueError(f"{where}: unknown motion {short(kind)}; expected one of: {choices}")
     explore = entry.get("explore", False)
     if not isinstance(explore, bool):
-        raise ValueError(f"{where}: explore must be true or false, got {explore!r}")
+        raise ValueError(f"{where}: explore must be true or false, got {short(explore)}")
     step = _step_from_dict(where, kind, {key: value for key, value in entry.items() if key != "explore"})
     return (dataclasses.replace(step, explore=explore),)
 
@@ -468,13 +469,13 @@ def _keys(keys: set[object]) -> str:
 def _number(value: object, name: str) -> float:
     """``value`` as a finite float; ``ValueError`` naming ``name`` and the value otherwise."""
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ValueError(f"{name} must be a finite number, got {value!r}")
+        raise ValueError(f"{name} must be a finite number, got {short(value)}")
     try:
         number = float(value)
     except OverflowError:
         raise ValueError(f"{name} must be a finite number, got an integer beyond 1.8e308") from None
     if not math.isfinite(number):
-        raise ValueError(f"{name} must be a finite number, got {value!r}")
+        raise ValueError(f"{name} must be a finite number, got {short(value)}")
     return number
 
 

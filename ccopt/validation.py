@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import sys
 from collections.abc import Iterable
 from numbers import Real
 from typing import TypeVar
@@ -19,12 +20,36 @@ import numpy as np
 T = TypeVar("T")
 
 
+def short(value: object, limit: int = 40) -> str:
+    """``repr(value)``, cut to ``limit`` characters (a 5,000-digit number named in one line)."""
+    text = repr(value)
+    return text if len(text) <= limit else f"{text[: limit - 12]}... ({len(text)} characters)"
+
+
+def parse_reason(error: Exception) -> str:
+    """Why a JSON or YAML parser refused a file, in one line and in a user's words: Python's own
+    limit on the digits of an integer is named, not its advice to raise it."""
+    text = str(error)
+    if "integer string conversion" in text:
+        return f"a number of over {sys.get_int_max_str_digits()} digits"
+    return text.splitlines()[0] if text else type(error).__name__
+
+
+def as_float(name: str, value: Real) -> float:
+    """``float(value)``; ``ValueError`` naming ``name`` for an integer beyond the largest float
+    (a settings file may hold ``10**400``, which ``float`` refuses with ``OverflowError``)."""
+    try:
+        return float(value)
+    except OverflowError:
+        raise ValueError(f"{name} must be finite, got an integer beyond 1.8e308: {short(value)}") from None
+
+
 def real(name: str, value: object) -> float:
     """``value`` as a finite float: ``TypeError`` unless a real number (not a bool), ``ValueError`` unless
     finite."""
     if isinstance(value, bool) or not isinstance(value, Real):
-        raise TypeError(f"{name} must be a real number, got {type(value).__name__} {value!r}")
-    number = float(value)
+        raise TypeError(f"{name} must be a real number, got {type(value).__name__} {short(value)}")
+    number = as_float(name, value)
     if not math.isfinite(number):
         raise ValueError(f"{name} must be finite, got {number!r}")
     return number
@@ -41,7 +66,7 @@ def positive(name: str, value: object) -> float:
 def reals(name: str, value: object, count: int) -> tuple[float, ...]:
     """``value`` as ``count`` finite floats (see :func:`real`; the items are named ``name[i]``)."""
     if isinstance(value, str) or np.ndim(value) != 1 or len(value) != count:
-        raise ValueError(f"{name} must be {count} numbers, got {value!r}")
+        raise ValueError(f"{name} must be {count} numbers, got {short(value)}")
     return tuple(real(f"{name}[{i}]", item) for i, item in enumerate(value))
 
 
@@ -51,21 +76,21 @@ def check_number(
     """``value`` as a float in ``(low, high]`` (``[low, high]`` if not ``low_open``); ``TypeError``
     unless a real number, ``ValueError`` unless finite and in range, naming ``name`` and the value."""
     if isinstance(value, bool) or not isinstance(value, Real):
-        raise TypeError(f"{name} must be a real number, got {value!r}")
-    number = float(value)
+        raise TypeError(f"{name} must be a real number, got {short(value)}")
+    number = as_float(name, value)
     above_low = number > low if low_open else number >= low
     if not (above_low and number <= high and math.isfinite(number)):
         bracket = "(" if low_open else "["
-        raise ValueError(f"{name} must be in {bracket}{low:g}, {high:g}], got {value!r}")
+        raise ValueError(f"{name} must be in {bracket}{low:g}, {high:g}], got {short(value)}")
     return number
 
 
 def check_count(name: str, value: object, low: int = 1) -> int:
     """``value`` as an int ``≥ low``; ``TypeError``/``ValueError`` naming ``name`` and the value."""
     if isinstance(value, bool) or not isinstance(value, int | np.integer):
-        raise TypeError(f"{name} must be an integer, got {value!r}")
+        raise TypeError(f"{name} must be an integer, got {short(value)}")
     if value < low:
-        raise ValueError(f"{name} must be an integer ≥ {low}, got {value!r}")
+        raise ValueError(f"{name} must be an integer ≥ {low}, got {short(value)}")
     return int(value)
 
 

@@ -21,6 +21,9 @@ Measured from the record, against the simulator's truth, after the fault's start
 ``over_limit_s``
     the longest time the true normal force stayed above :data:`OVER_LIMIT` × the hand's largest
     normal force (``Hand.force_limits[1]``) from ``t_f`` on (sample period × samples in a row);
+``kept_s``, ``kept_all``
+    the data kept: the time of the record's last sample (s), and whether the record holds the run to
+    its end (its last sample within one record period of the run's last moment);
 ``loads``, ``plots``
     whether the folder loads (:func:`ccopt.record.load_record`, at least one sample) and draws (the
     still figures of :data:`ccopt.plots.FIGURES`, written into the folder; the GIF is left out, it
@@ -28,8 +31,8 @@ Measured from the record, against the simulator's truth, after the fault's start
 
 Issue 12's acceptance, checked per trial and counted in the summary: ``over_limit_s`` at most
 :data:`MAX_OVER_LIMIT_S`; the run completed, or ended with a named status within :data:`MAX_END_S` of
-``t_f``; the folder loads and plots. Outputs in ``<out>``: ``results.json``/``results.csv`` and the
-table printed at the end.
+``t_f``; the record holds the run to its end; the folder loads and plots. Outputs in ``<out>``:
+``results.json``/``results.csv`` and the table printed at the end.
 """
 
 from __future__ import annotations
@@ -112,12 +115,16 @@ def fault_trial(spec: FaultTrial) -> dict:
     over_limit = OVER_LIMIT * params.hand.force_limits[1]
     forces = forces_after(loaded, spec.start, over_limit) if loaded is not None else {}
     over_s = forces.get("over_limit_s")
+    kept_s = float(loaded["time"][-1]) if loaded is not None else None
+    record_period = params.record_stride / params.estimator_hz
     return {
         "status": status,
         "message": done.result.message,
         "ended_after_s": ended_after,
         "peak_force_n": forces.get("peak_force_n"),
         "over_limit_s": over_s,
+        "kept_s": kept_s,
+        "kept_all": kept_s is not None and kept_s >= done.result.sim_time - record_period - _TIME_TOLERANCE,
         **kept_checks,
         "ended_in_time": status == "completed" or ended_after <= MAX_END_S + _TIME_TOLERANCE,
         "force_ok": over_s is not None and over_s <= MAX_OVER_LIMIT_S + _TIME_TOLERANCE,
@@ -181,7 +188,7 @@ def make_specs(
 
 # --- output ---------------------------------------------------------------------------------------
 
-CHECKS = ("force_ok", "ended_in_time", "loads", "plots")
+CHECKS = ("force_ok", "ended_in_time", "kept_all", "loads", "plots")
 """The acceptance checks of a trial (see the module docstring)."""
 
 
@@ -195,11 +202,11 @@ def summarise(specs: Sequence[FaultTrial], results: Sequence[dict]) -> dict:
             "max_over_limit_s": MAX_OVER_LIMIT_S,
             "max_end_s": MAX_END_S,
         },
-        "passed": {check: sum(bool(r[check]) for _, r in ran) for check in CHECKS},
+        "passed": {check: sum(bool(r.get(check)) for _, r in ran) for check in CHECKS},
         "failed": [
             {"index": spec.index, "fault": spec.fault, "object": spec.object, "checks": missed}
             for spec, r in ran
-            if (missed := [check for check in CHECKS if not r[check]])
+            if (missed := [check for check in CHECKS if not r.get(check)])
         ],
         "errors": dict(runner.failures(results)),
     }
@@ -209,7 +216,7 @@ def table_rows(specs: Sequence[FaultTrial], results: Sequence[dict]) -> list[tup
     rows = []
     for spec, r in zip(specs, results, strict=True):
         if "error" in r:
-            rows.append((spec.fault, spec.object, "ERROR", "", "", "", "", r["error"]))
+            rows.append((spec.fault, spec.object, "ERROR", "", "", "", "", "", r["error"]))
             continue
         over = r["over_limit_s"]
         rows.append(
@@ -220,11 +227,20 @@ def table_rows(specs: Sequence[FaultTrial], results: Sequence[dict]) -> list[tup
                 cell(r["ended_after_s"]),
                 cell(r["peak_force_n"], 1),
                 "n/a" if over is None else f"{1e3 * over:.0f}",
+                kept_cell(r),
                 f"{'yes' if r['loads'] else 'NO'}/{'yes' if r['plots'] else 'NO'}",
-                ", ".join(check for check in CHECKS if not r[check]) or "-",
+                ", ".join(check for check in CHECKS if not r.get(check)) or "-",
             )
         )
     return rows
+
+
+def kept_cell(result: dict) -> str:
+    """The data kept: the record's last sample (s), and ``all`` if that is the run's end (``n/a`` in a
+    trial measured before the study measured it)."""
+    if result.get("kept_s") is None:
+        return "n/a"
+    return f"{result['kept_s']:.2f}{' all' if result['kept_all'] else ' CUT'}"
 
 
 def acceptance_rows(summary: dict) -> list[tuple[str, str]]:
@@ -232,6 +248,7 @@ def acceptance_rows(summary: dict) -> list[tuple[str, str]]:
     what = {
         "force_ok": f"true f_n over {OVER_LIMIT:g}× its limit for ≤ {1e3 * MAX_OVER_LIMIT_S:.0f} ms from t_f",
         "ended_in_time": f"completed, or ended within {MAX_END_S:g} s of t_f",
+        "kept_all": "the record holds the run to its end",
         "loads": "the folder loads",
         "plots": "the folder plots (still figures)",
     }
@@ -245,6 +262,7 @@ HEADER = (
     "ended after (s)",
     "peak f_n (N)",
     f"over {OVER_LIMIT:g}×limit (ms)",
+    "data kept to (s)",
     "loads/plots",
     "fails",
 )

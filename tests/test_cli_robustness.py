@@ -52,7 +52,8 @@ TRIANGLE = "0,0;100,0;0,100"
         (["--controller-hz", "nan"], ("--controller-hz", "nan")),
         (["--vertices", "0,0;1e300,0;0,1e300"], ("1 cm to 1 m", "1.41e+297 m")),
         (["--vertices", "0,0;5,0;0,5"], ("1 cm to 1 m", "0.005 m")),
-        (["--vertices", heptagon_mm(55.0)], ("0.055 m", "shorter than the hand")),
+        (["--vertices", heptagon_mm(55.0)], ("0.055 m", "shorter than the hand", "no face of", "fits")),
+        (["--vertices", "0,0;50,0;100,50;0,100"], ("face 0 of", "shorter", "faces 1, 2, 3 fit")),
         (["--vertices", TRIANGLE, "--added-mass", "-0.5"], ("--added-mass", "-0.5")),
         (["--added-mass", "inf"], ("--added-mass", "inf")),
         (["--mass", "nan"], ("--mass", "nan")),
@@ -77,13 +78,16 @@ def test_bad_values_are_one_line_exit_2_and_leave_no_folder(tmp_path, capsys, ar
     ("name", "content", "named"),
     [
         ("huge.yaml", f"steps: [{{motion: pivot, delta_deg: {10**400}}}]", "beyond 1.8e308"),
-        ("digits.json", '{"steps": [{"motion": "pivot", "delta_deg": ' + "9" * 5000 + "}]}", "malformed"),
+        ("digits.json", '{"steps": [{"motion": "pivot", "delta_deg": ' + "9" * 5000 + "}]}", "4300 digits"),
+        ("digits.yaml", "steps: [{motion: pivot, delta_deg: " + "9" * 5000 + "}]", "over 4300 digits"),
         ("big.json", '{"steps": [{"motion": "pivot", "delta_deg": 1e200}]}', "at most 3.142 rad"),
         ("hold.json", '{"steps": [{"motion": "hold", "duration_s": 1e300}]}', "(0, 3600] s"),
         ("nan.json", '{"steps": [{"motion": "hold", "duration_s": NaN}]}', "finite"),
         ("mixed.yaml", "1: one\nsteps: [{motion: hold}]\n", "unknown schedule key(s): 1"),
         ("mixed_step.yaml", "steps: [{motion: hold, 2: x, speed: 1}]\n", "unknown key(s) 2, speed"),
         ("binary.yaml", bytes(range(256)), "not a text file"),
+        ("long.yaml", f"steps: [{{motion: {'x' * 5000}}}]", "unknown motion 'xxx"),
+        ("long_value.yaml", f"steps: [{{motion: hold, duration_s: {'9' * 4000}x}}]", "duration_s"),
     ],
 )
 def test_bad_schedule_files_name_the_file(tmp_path, capsys, name, content, named):
@@ -147,11 +151,27 @@ def test_a_used_folder_is_refused_unless_overwritten(tmp_path, capsys):
 @pytest.mark.parametrize("out", ["", "."])
 def test_the_current_directory_is_no_run_folder(tmp_path, capsys, monkeypatch, out):
     monkeypatch.chdir(tmp_path)
-    one_line_exit_2(capsys, lambda: short_run(out), "current directory")
+    one_line_exit_2(capsys, lambda: short_run(out), f"output folder {out!r} is the current directory")
     assert list(tmp_path.iterdir()) == []
 
 
 # --- faults and time limits -----------------------------------------------------------------------
+
+
+def test_a_run_that_ends_without_reaching_its_steps_exits_3(tmp_path, capsys):
+    """Issue 12's exit status: 3 when the run ended early, goals or steps not reached too. A pivot
+    of 30° given 0.3 s ends 'timeout' (the loop's own verdict); the same schedule with the time to
+    do it exits 0, so the check can tell them apart."""
+    short, enough = tmp_path / "short.yaml", tmp_path / "enough.yaml"
+    short.write_text("steps: [{motion: pivot, delta_deg: 30, timeout_s: 0.3}]\n")
+    enough.write_text("steps: [{motion: pivot, delta_deg: 7.2, timeout_s: 8}]\n")
+    common = ["run", "--no-figures", "--no-progress", "--schedule"]
+    assert cli.main([*common, str(short), "--out", str(tmp_path / "a")]) == 3
+    err = [line for line in capsys.readouterr().err.splitlines() if not line.startswith("warning:")]
+    assert err == ["ccopt run: not done: 1 of 1 motion steps not reached (step 1 timeout)"]
+    assert record.load_record(tmp_path / "a").meta["status"] == "completed"
+    assert cli.main([*common, str(enough), "--out", str(tmp_path / "b")]) == 0
+    assert "not done" not in capsys.readouterr().err
 
 
 def test_a_fault_from_the_command_line_ends_the_run_as_a_sensor_fault(tmp_path, capsys):

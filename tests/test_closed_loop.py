@@ -5,6 +5,7 @@ import pytest
 
 from ccopt import closed_loop, metrics, record
 from ccopt.objects import make_object
+from ccopt.plant.sensors import SensorParams, parse_fault
 from ccopt.schedule import load_schedule
 
 
@@ -89,3 +90,61 @@ def test_a_run_without_a_sample_is_summarised_with_the_same_keys_and_nothing_mea
     assert summary["theta_err_deg"]["median"] is None and summary["normal_force_n"]["max"] is None
     assert summary["ratio_by_kind"].keys() == measured["ratio_by_kind"].keys()
     assert summary["mode_confusion"].keys() == measured["mode_confusion"].keys()
+
+
+def test_the_target_holds_still_from_the_first_reading_a_dropout_loses():
+    """A reading without a pose or a wrench stops the target at once, not at the next control tick:
+    between two lost readings in a row the recorded target does not move (issue 12). Without the
+    fault the target moves between most pairs of readings, so the check can fail."""
+    faults = (parse_fault("dropout:0.3@0.5"),)
+    params = closed_loop.LoopParams(sensor_params=SensorParams(faults=faults))
+    result = closed_loop.run(make_object("paper-triangle"), load_schedule("smoke"), params, seed=1)
+    samples = result.samples
+    lost = ~(np.isfinite(samples["hand_pose"]).all(axis=1) & np.isfinite(samples["hand_wrench"]).all(axis=1))
+    moved = np.abs(np.diff(samples["target"], axis=0)).max(axis=1) > 0.0
+    in_a_row = lost[1:] & lost[:-1]
+    assert in_a_row.sum() > 20 and moved[~lost[1:] & ~lost[:-1]].mean() > 0.5
+    assert not moved[in_a_row].any(), samples["time"][1:][in_a_row & moved]
+
+
+def failing_after(monkeypatch, start: float, until: float = np.inf) -> None:
+    """The QP back end returns NaN for every solve while the plant's time is in [start, until)."""
+    from ccopt.control import qp
+
+    solve, clock = qp.CasadiQPSolver.solve, {"time": 0.0}
+    advance = closed_loop._Loop._advance_plant
+
+    def timed(self):
+        advance(self)
+        clock["time"] = self.plant.time
+
+    def broken(self, instance):
+        solution = solve(self, instance)
+        if start <= clock["time"] < until:
+            bad = np.full(3, np.nan)
+            return qp.QPSolution(bad, bad, np.nan, False, solution.backend)
+        return solution
+
+    monkeypatch.setattr(closed_loop._Loop, "_advance_plant", timed)
+    monkeypatch.setattr(qp.CasadiQPSolver, "solve", broken)
+
+
+def test_a_solver_that_keeps_failing_ends_the_run_as_an_error(monkeypatch):
+    """No finite step for ``solver_grace`` (0.2 s): status ``error`` naming the solver, the target held
+    from the first failed tick (it had been moving), not a run that times out its steps (issue 12)."""
+    failing_after(monkeypatch, start=0.8)
+    result = closed_loop.run(make_object("paper-triangle"), load_schedule("smoke"), seed=1)
+    assert result.status == "error" and "QP solver gave no finite step from t = 0.8" in result.message
+    assert 1.0 <= result.sim_time <= 1.0 + 2.0 / 30.0  # 0.2 s after the first failure, within a tick
+    time, target = result.samples["time"], result.samples["target"]
+    failed = time > 0.8 + 1.0 / 30.0
+    np.testing.assert_array_equal(target[failed], np.broadcast_to(target[failed][0], target[failed].shape))
+    assert np.abs(np.diff(target[(time > 0.5) & (time < 0.8)], axis=0)).max() > 0.0
+
+
+def test_a_solver_failing_briefly_holds_and_the_run_completes(monkeypatch):
+    failing_after(monkeypatch, start=0.8, until=0.9)
+    result = closed_loop.run(make_object("paper-triangle"), load_schedule("smoke"), seed=1)
+    assert result.status == "completed"
+    time = result.samples["time"]
+    assert not result.samples["qp_feasible"][(time > 0.84) & (time < 0.9)].all()

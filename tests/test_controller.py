@@ -127,3 +127,57 @@ def test_bad_parameters_raise():
         Controller(Hand(force_limits=(15.0, 25.0)), params=ControllerParams(normal_force=10.0))
     with pytest.raises(ValueError, match="period"):
         Controller(period=0.0)
+
+
+class BrokenSolver:
+    """A QP back end that fails as a numerical solver can: a step of NaN or infinity."""
+
+    backend = "broken"
+
+    def __init__(self, value: float) -> None:
+        self.value = value
+
+    def solve(self, instance):
+        from ccopt.control.qp import QPSolution
+
+        bad = np.full(3, self.value)
+        return QPSolution(bad, bad, self.value, False, self.backend)
+
+
+@pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
+def test_a_step_the_solver_got_wrong_holds_the_target_and_is_flagged_infeasible(value):
+    """Issue 12: the controller checks that the solver's step is finite. It returns no motion (the
+    target holds) and a solution flagged infeasible, never a NaN the plant would be driven with."""
+    broken = Controller(params=ControllerParams(), solver=BrokenSolver(value))
+    current = state()
+    output = broken.update(current, Command(Motion.PIVOT, np.array([THETA + 0.1, S_H, S_G])))
+    np.testing.assert_array_equal(output.step, np.zeros(3))
+    assert not output.solved and not output.solution.feasible and output.solution.slack == np.inf
+    np.testing.assert_array_equal(output.solution.wrench_change, np.zeros(3))
+
+
+def violation(instance, step_task):
+    """The largest violation of the instance's active rows by a step in the QP's units: the QP's own
+    row ``γ nᵀ P Δy − t ≤ b − nᵀ w`` solved for ``t`` (0 if none is violated)."""
+    active = np.asarray(instance.active, dtype=bool)
+    rows, change = instance.rows[active], instance.stiffness @ step_task
+    excess = instance.gains[active] * (rows @ change) - (instance.bounds[active] - rows @ instance.wrench)
+    return max(0.0, float(excess.max(initial=0.0)))
+
+
+def test_a_step_scaled_to_the_speed_limit_reports_its_own_wrench_change_and_slack():
+    """Issue 12: the solution reported is the one of the step returned, not of the step before the
+    controller scaled it down to its speed limit. The reference is the same tick without a limit."""
+    current = state(wrench=(10.0, 3.0, 0.0))
+    command = Command(Motion.PIVOT, np.array([THETA + 1.0, S_H, S_G]))
+    free = Controller(params=ControllerParams(max_speed=(1e9, 1e9, 1e9))).update(current, command)
+    limited = Controller(params=ControllerParams())
+    output = limited.update(current, command)
+    excess = np.max(np.abs(free.step) / (np.asarray(limited.params.max_speed) * limited.period))
+    assert excess > 1.5  # the limit scaled this step
+    np.testing.assert_allclose(output.step, free.step / excess, rtol=1e-9)
+    np.testing.assert_allclose(output.solution.step, free.solution.step / excess, rtol=1e-9)
+    np.testing.assert_allclose(output.solution.wrench_change, free.solution.wrench_change / excess, rtol=1e-9)
+    assert violation(free.instance, free.solution.step) == pytest.approx(free.solution.slack, abs=1e-6)
+    assert output.solution.slack == pytest.approx(violation(output.instance, output.solution.step), abs=1e-12)
+    assert output.solution.feasible == (output.solution.slack <= 1e-7)

@@ -44,7 +44,8 @@ def test_the_figures_are_those_of_the_record(study):
         assert row["ended_after_s"] == pytest.approx(loaded.summary["sim_time_s"] - 0.8, abs=1e-9)
         assert time[-1] == pytest.approx(0.8 + row["ended_after_s"], abs=0.011)
         assert row["peak_force_n"] == pytest.approx(normal[time >= 0.8].max())
-        assert row["loads"] and row["plots"]
+        assert row["loads"] and row["plots"] and row["kept_all"] and row["kept_s"] == time[-1]
+        assert time[-1] == pytest.approx(loaded.summary["sim_time_s"], abs=0.011)  # kept to the end
         assert row["force_ok"] == (row["over_limit_s"] <= 0.05) and row["peak_force_n"] < 1.2 * limit
     by_fault = {t["spec"]["fault"]: t["result"] for t in results["trials"]}
     assert by_fault["none"]["status"] == "completed"
@@ -52,7 +53,8 @@ def test_the_figures_are_those_of_the_record(study):
     assert by_fault["scale-ft:3.0"]["status"] == "sensor_fault"
     dead = record.load_record(results["trials"][1]["spec"]["folder"])
     assert np.all(dead["hand_wrench"][dead["time"] >= 0.8] == 0.0)  # the fault acted from t_f
-    assert results["summary"]["passed"] == {"force_ok": 3, "ended_in_time": 3, "loads": 3, "plots": 3}
+    passed = {"force_ok": 3, "ended_in_time": 3, "kept_all": 3, "loads": 3, "plots": 3}
+    assert results["summary"]["passed"] == passed
 
 
 def test_a_second_run_resumes_and_runs_nothing(study, capsys):
@@ -71,6 +73,14 @@ def test_a_second_run_resumes_and_runs_nothing(study, capsys):
 )
 def test_longest_run(flags, longest):
     assert faults.longest_run(np.array(flags, dtype=bool)) == longest
+
+
+def test_a_record_cut_short_is_not_data_kept():
+    """The check the table's 'data kept' column shows: a trial whose record stops before the run's
+    end (as a lost chunk would leave it) reads CUT, one measured before the column existed n/a."""
+    assert faults.kept_cell({"kept_s": 2.9, "kept_all": True}) == "2.90 all"
+    assert faults.kept_cell({"kept_s": 1.2, "kept_all": False}) == "1.20 CUT"
+    assert faults.kept_cell({}) == "n/a"
 
 
 @pytest.mark.parametrize(

@@ -79,6 +79,9 @@ def test_overwrite_clears_every_file_a_run_writes(tmp_path):
         ("figures/a.png", "run/figures"),
         ("chunks/readme.md", "chunks/readme.md"),
         ("chunks/old/x", "chunks/old"),
+        ("photo.png", "run/photo.png"),
+        ("talk.gif", "run/talk.gif"),
+        ("draft.partial", "run/draft.partial"),
     ],
 )
 def test_overwrite_refuses_files_a_run_does_not_write(tmp_path, foreign, named):
@@ -238,3 +241,13 @@ def test_the_run_id_key_is_reserved(tmp_path):
         writer.append({record.RUN_ID_KEY: 1.0})
     with pytest.raises(ValueError, match="flush_every"):
         record.RecordWriter(tmp_path / "other", {}, flush_every=0)
+
+
+def test_every_file_a_run_or_its_figures_write_is_a_run_file():
+    """The names come from the modules that write them (the figures, the GIF, the feasibility maps
+    and their temporary files), so a new figure cannot be left out of ``--overwrite`` unnoticed."""
+    from ccopt import feasibility_map, plots
+
+    written = {*plots.FIGURES, "animation.gif", feasibility_map.FIGURE_NAME, feasibility_map.FILE_NAME}
+    written |= {f"{feasibility_map.FILE_NAME}.partial", "meta.partial", "summary.partial"}
+    assert written <= record.RUN_FILES

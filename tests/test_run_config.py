@@ -138,3 +138,54 @@ def test_a_settings_file_that_is_not_a_mapping_is_one_line(tmp_path, capsys):
         cli.main(["run", "--config", str(path), "--out", str(tmp_path / "run")])
     (line,) = capsys.readouterr().err.strip().splitlines()
     assert str(path) in line and "mapping" in line
+
+
+HUGE = 10**400
+"""An integer beyond the largest float (YAML and JSON read it exactly)."""
+
+
+@pytest.mark.parametrize(
+    ("path", "value"),
+    [
+        (("params", "estimator_hz"), HUGE),
+        (("params", "max_sim_s"), HUGE),
+        (("params", "hand", "half_length"), HUGE),
+        (("params", "sensors", "sigma_force"), -HUGE),
+        (("params", "controller", "normal_force"), HUGE),
+        (("object", "mass"), HUGE),
+        (("object", "vertices"), [[0, 0], [HUGE, 0], [0, 0.1]]),
+        (("seed",), 10**4000),
+    ],
+    ids=lambda value: ".".join(value) if isinstance(value, tuple) else "",
+)
+def test_a_huge_integer_in_a_file_is_one_short_line_naming_it(tmp_path, capsys, path, value):
+    """Never the ``OverflowError`` of ``float(10**400)``, nor a line of 4,000 digits (issue 12)."""
+    settings: dict = {"schedule": "smoke", "object": {"name": "paper-triangle"}}
+    node = settings
+    for key in path[:-1]:
+        node = node.setdefault(key, {})
+    node[path[-1]] = value
+    file = tmp_path / "huge.json"
+    file.write_text(json.dumps(settings))
+    out = tmp_path / "run"
+    with pytest.raises(SystemExit) as ended:
+        cli.main(["run", "--config", str(file), "--no-progress", "--out", str(out)])
+    assert ended.value.code == 2 and not out.exists()
+    captured = capsys.readouterr()
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in captured.err, captured.err
+    line = lines[0]
+    assert line.startswith(f"ccopt run: error: {path[0]}") and path[-1] in line and len(line) < 300, line
+
+
+@pytest.mark.parametrize("name", ["digits.yaml", "digits.json"])
+def test_a_number_of_more_digits_than_python_reads_is_named_in_the_users_words(tmp_path, capsys, name):
+    """Not Python's advice to call ``sys.set_int_max_str_digits()``."""
+    file = tmp_path / name
+    digits = "9" * 5000
+    file.write_text(f"seed: {digits}" if name.endswith(".yaml") else f'{{"seed": {digits}}}')
+    with pytest.raises(SystemExit) as ended:
+        cli.main(["run", "--config", str(file), "--no-progress", "--out", str(tmp_path / "run")])
+    assert ended.value.code == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert str(file) in line and "a number of over 4300 digits" in line and "sys." not in line, line

@@ -129,3 +129,31 @@ def test_sigterm_stops_a_pooled_study_and_the_runs_under_way(tmp_path):
     for meta in metas:
         assert status(meta.parent) == "interrupted"
         assert_loads(meta.parent)
+
+
+SWALLOWED = """
+import os, signal, sys, time
+from ccopt.cliutil import stop_signals
+
+with stop_signals("prog"):
+    try:
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(1)
+    except KeyboardInterrupt:
+        pass
+    try:  # what CasADi does when it checks for signals in C++: its own KeyboardInterrupt replaces ours
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(1)
+    except BaseException:
+        pass
+print("survived")
+"""
+
+
+def test_a_second_signal_ends_the_program_even_if_its_exception_is_swallowed():
+    """The second signal's exit cannot be undone by code that catches what the handler raises (a C
+    extension that runs the signal handlers itself and replaces their exception, as CasADi does:
+    the suite once saw 'SIGTERM again: stopping now' followed by the first signal's ending)."""
+    done = subprocess.run([sys.executable, "-c", SWALLOWED], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 130 and "survived" not in done.stdout, (done.stdout, done.stderr)
+    assert done.stderr.splitlines() == ["prog: SIGTERM again: stopping now"]

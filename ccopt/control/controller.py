@@ -53,7 +53,7 @@ import numpy as np
 
 from ccopt import contact, modes, validation
 from ccopt.contact import N_CONE_ROWS
-from ccopt.control.qp import QPInstance, QPSolution, QPSolver, make_solver
+from ccopt.control.qp import INFEASIBLE_SLACK, QPInstance, QPSolution, QPSolver, make_solver
 from ccopt.hand import Hand
 from ccopt.modes import Motion
 
@@ -223,11 +223,32 @@ class Command:
 
 @dataclass(frozen=True)
 class ControlOutput:
-    """One tick's result: the hand-frame target change and the QP's diagnostics."""
+    """One tick's result: the hand-frame target change and the QP's diagnostics; ``solved`` is False
+    when the solver gave no finite step (the step is then zero, the solution infeasible)."""
 
     step: np.ndarray
     solution: QPSolution
     instance: QPInstance
+    solved: bool = True
+
+
+def _failed(solution: QPSolution) -> QPSolution:
+    """A solver's answer that is not a finite step, as the controller reports it: no step, no wrench
+    change, infinite slack, infeasible."""
+    return QPSolution(np.zeros(3), np.zeros(3), math.inf, False, solution.backend)
+
+
+def _scaled(solution: QPSolution, instance: QPInstance, factor: float) -> QPSolution:
+    """The solution of the step ``factor`` times the solver's (the speed limit): its wrench change,
+    and its slack on the instance's active rows (the QP's rows ``γ nᵀ P Δy − t ≤ b − nᵀ w``) and
+    whether that is feasible, evaluated again for that step."""
+    step = solution.step * factor
+    change = instance.stiffness @ step
+    active = instance.active
+    rows = instance.rows[active]
+    excess = instance.gains[active] * (rows @ change) - (instance.bounds[active] - rows @ instance.wrench)
+    slack = max(0.0, float(excess.max(initial=0.0)))
+    return QPSolution(step, change, slack, slack <= INFEASIBLE_SLACK, solution.backend)
 
 
 class _Terms:
@@ -309,14 +330,23 @@ class Controller:
         return self._units.copy()
 
     def update(self, state: ControlInput, command: Command) -> ControlOutput:
-        """The hand-frame change of the impedance target ``(Δn, Δt, Δθ)`` (m, m, rad) for this tick."""
+        """The hand-frame change of the impedance target ``(Δn, Δt, Δθ)`` (m, m, rad) for this tick.
+
+        A step the solver returns that is not finite gives no change (the target holds), ``solved``
+        False and a solution flagged infeasible with infinite slack: never a NaN for the plant. A step
+        beyond the speed limit is scaled down to it, and the solution reported is the scaled step's."""
         instance = self.build_instance(state, command)
         solution = self.solver.solve(instance)
         step = self._units * solution.step  # the QP's variable is the step in task units
+        if not all(map(math.isfinite, step.tolist())):  # the solver failed: no motion this tick
+            held = {"step": np.zeros(3), "solution": _failed(solution), "instance": instance, "solved": False}
+            return validation.trusted(ControlOutput, held)
         excess = max(map(truediv, map(abs, step.tolist()), self._max_step_list))
-        step = step / excess if excess > 1.0 else step  # scaled, not clipped: the step keeps its
-        # direction, and with it the balance of the wrench it predicts
-        return validation.trusted(ControlOutput, {"step": step, "solution": solution, "instance": instance})
+        if excess > 1.0:  # scaled, not clipped: the step keeps its direction, and with it the balance
+            step = step / excess  # of the wrench it predicts; the solution reported is the scaled step's
+            solution = _scaled(solution, instance, 1.0 / excess)
+        solved = {"step": step, "solution": solution, "instance": instance, "solved": True}
+        return validation.trusted(ControlOutput, solved)
 
     def build_instance(self, state: ControlInput, command: Command) -> QPInstance:
         """The QP of this tick (exposed for studies and tests)."""

@@ -104,9 +104,10 @@ class StartConfig:
     def __post_init__(self) -> None:
         face = self.hand_face
         if isinstance(face, bool) or not isinstance(face, int | np.integer):
-            raise TypeError(f"hand_face must be an integer, got {type(face).__name__} {face!r}")
+            got = f"{type(face).__name__} {validation.short(face)}"
+            raise TypeError(f"hand_face must be an integer, got {got}")
         if face < 0:
-            raise ValueError(f"hand_face must be non-negative, got {face}")
+            raise ValueError(f"hand_face must be non-negative, got {validation.short(face)}")
         object.__setattr__(self, "hand_face", int(face))
         for name in ("theta_o", "s_h", "x_o"):
             object.__setattr__(self, name, validation.real(name, getattr(self, name)))

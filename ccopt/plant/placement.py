@@ -50,9 +50,11 @@ def hand_over_vertex(obj: PlanarObject, start: StartConfig, hand: Hand) -> Start
     low, high = face_s_h_range(obj, start)
     inset = hand.half_length + 2e-3
     if high - low < 2.0 * inset:
+        fitting = [k for k in range(obj.n_faces) if obj.face_length(k) >= 2.0 * inset]
+        others = f"faces {', '.join(map(str, fitting))} fit" if fitting else f"no face of {obj.name} fits"
         raise ValueError(
             f"face {obj.face_index(start.hand_face)} of {obj.name} ({high - low:.3f} m) is shorter "
-            f"than the hand ({2.0 * hand.half_length:.3f} m)"
+            f"than the hand ({2.0 * hand.half_length:.3f} m, {2e3 * inset:.0f} mm with its margins); {others}"
         )
     return dataclasses.replace(start, s_h=float(np.clip(0.0, low + inset, high - inset)))
 
