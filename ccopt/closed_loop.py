@@ -213,19 +213,41 @@ def control_input(
         values["cone_rows"] = contact.with_hand_friction(estimate.cone_rows, target.mu_h)
         values["mu_h"] = target.mu_h
     values["row_valid"] = enforced_rows(estimate)
+    usable = kinematics_usable(estimate)
+    if not usable:
+        values["s_h"], values["d"] = rough_lever(estimate)
     return validation.trusted(  # every field, each well formed by construction
         ControlInput,
         {
             **values,
             "l_h": estimate.torque_lever,
             "hand_angle": float(hand_pose[2]),
-            "kinematics_valid": kinematics_usable(estimate),
+            "kinematics_valid": usable,
             "coordinates": coordinates,
             "force_target": target.force,
             "tangential_target": target.tangential,
             "statics_margin": target.margin if target.force is not None else None,
         },
     )
+
+
+ROUGH_LEVER_STD = 0.01
+"""m: before the kinematics are valid, the controller's ``v_θ`` takes the rough ``ŝ_h`` and ``d̂`` once
+both standard deviations are at most this (:func:`rough_lever`)."""
+
+
+def rough_lever(estimate: Estimate) -> tuple[float, float]:
+    """``(s_h, d)`` (m) for the controller's ``v_θ`` before the kinematics are valid: their rough
+    means where both are known to :data:`ROUGH_LEVER_STD`, else NaN (the paper's naive ``v_θ``,
+    ``s_h = 0``). The naive one pivots the hand about its own centre: with the hand 6–8 cm from the
+    ground contact (where an experimenter's tour may start it) the exploration's 7.2° pivots then
+    pushed the hand onto its edge and turned it 2–3° against the object; the rough estimate is
+    within a centimetre after the first small pivots."""
+    _, s_h, _, d = estimate.kinematics_mean
+    _, std_s_h, _, std_d = estimate.kinematics_std
+    if std_s_h <= ROUGH_LEVER_STD and std_d <= ROUGH_LEVER_STD:  # False for NaN
+        return s_h, d
+    return math.nan, math.nan
 
 
 def enforced_rows(estimate: Estimate) -> np.ndarray:

@@ -1,5 +1,7 @@
 """One controller tick against the contact model: it moves along the right direction, inside the cone."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 from scipy.optimize import minimize_scalar
@@ -107,15 +109,33 @@ def test_normal_force_is_regulated_towards_its_target(controller):
     assert light.solution.wrench_change[0] > 0.0 > heavy.solution.wrench_change[0]
 
 
-def test_naive_v_theta_before_the_kinematics_are_known(controller):
-    current = state(valid=False)
+def pivot_direction(controller, s_h, d):
+    """The QP's pivot term direction for ``v_θ(s_h, d)``: ``Δq = vᵀKΔx / vᵀKv`` in the QP's units."""
+    v_theta = contact.admissible_motions(THETA, s_h, d)[:, 0]
+    stiffness = Hand().stiffness_in_hand_frame(THETA)
+    expected = stiffness @ v_theta / (v_theta @ stiffness @ v_theta)
+    return expected * controller.step_units / controller.params.angle_unit  # Δx = units · y
+
+
+def test_naive_v_theta_before_the_kinematics_are_even_roughly_known(controller):
+    current = dataclasses.replace(state(valid=False), s_h=np.nan, d=np.nan)
     goal = np.array([THETA + 0.1, S_H, S_G])
     instance = controller.build_instance(current, Command(Motion.PIVOT, goal))
-    naive = contact.admissible_motions(THETA, 0.0, controller.params.d_guess)[:, 0]
-    stiffness = Hand().stiffness_in_hand_frame(THETA)
-    expected = stiffness @ naive / (naive @ stiffness @ naive)  # Δq = vᵀKΔx / vᵀKv
-    units = controller.step_units  # the QP's variable y: Δx = units · y; θ in angle units
-    np.testing.assert_allclose(instance.directions[0], expected * units / controller.params.angle_unit)
+    naive = pivot_direction(controller, 0.0, controller.params.d_guess)
+    np.testing.assert_allclose(instance.directions[0], naive)
+
+
+def test_a_rough_estimate_shapes_v_theta_before_the_kinematics_are_valid(controller):
+    """Not yet valid, but ``s_h`` and ``d`` given (the loop's rough estimate): ``v_θ`` is theirs,
+    the same as once valid, and not the naive one."""
+    goal = np.array([THETA + 0.1, S_H, S_G])
+    rough = dataclasses.replace(state(valid=False), s_h=-0.06, d=0.12)
+    valid = dataclasses.replace(rough, kinematics_valid=True)
+    command = Command(Motion.PIVOT, goal)
+    directions = [controller.build_instance(s, command).directions[0] for s in (rough, valid)]
+    np.testing.assert_allclose(directions[0], pivot_direction(controller, -0.06, 0.12))
+    np.testing.assert_allclose(directions[0], directions[1])
+    assert not np.allclose(directions[0], pivot_direction(controller, 0.0, controller.params.d_guess))
 
 
 def test_bad_parameters_raise():

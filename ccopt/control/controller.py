@@ -29,7 +29,8 @@ Cost (paper eq. 21)
     has begun (its coordinate has not moved by :attr:`ControllerParams.slide_onset`), a push term
     drives the removed row's value past its estimated bound (the true bound lies beyond the
     conservative estimate), the moment kept balanced: the contact slides where the physics lets it.
-    Before the kinematics are known the paper's naive ``v_θ`` is used (``s_h = 0``, ``d = d_guess``).
+    Before the kinematics are known ``v_θ`` takes their rough estimate where it is good enough
+    (:func:`ccopt.closed_loop.control_input`), else the paper's naive one (``s_h = 0``, ``d = d_guess``).
 Rows (paper eq. 19)
     The estimated cone rows the commanded motion keeps (:func:`ccopt.modes.kept_rows`), with margins
     relative to each row's width, on the predicted wrench ``w + P Δx``, plus ``f_min ≤ f_n ≤ f_max``.
@@ -177,9 +178,11 @@ class ControlInput:
         mu_h: estimated hand friction coefficient ``μ̂_h`` (scales the friction margin).
         l_h: torque-row lever used by the estimate (m): scales the torque margin.
         hand_angle: measured ``θ_h`` (rad): the hand frame in which ``Δx_tar`` is expressed.
-        s_h: estimated ``s_h`` (m), shapes ``v_θ`` once the kinematics are valid.
+        s_h: estimated ``s_h`` (m), shapes ``v_θ``: valid, or before that a rough estimate good
+            enough for it (:func:`ccopt.closed_loop.control_input`); NaN: the naive ``v_θ``.
         d: estimated distance ``d`` from the ground contact to the hand face (m), likewise.
-        kinematics_valid: whether ``s_h`` and ``d`` are estimated yet (else the naive ``v_θ``).
+        kinematics_valid: whether the kinematics are valid (the progress ``coordinates`` are then
+            estimated ones).
         coordinates: the ``(θ_o, s_h, s_g)`` that progress is measured on (rad, m, m), the same
             source as the command's targets.
         force_target: the normal force the motion's statics need (N), None for the default.
@@ -352,7 +355,9 @@ class Controller:
         """The QP of this tick (exposed for studies and tests)."""
         p = self.params
         stiffness = self.hand.stiffness_in_hand_frame(state.hand_angle)
-        s_h, d = (state.s_h, state.d) if state.kinematics_valid else (0.0, p.d_guess)
+        s_h, d = state.s_h, state.d
+        if not (math.isfinite(s_h) and math.isfinite(d)):  # not even roughly known: the naive v_θ
+            s_h, d = 0.0, p.d_guess
         vectors = contact.admissible_motions(state.hand_angle, s_h, d)
         free, balance = self._model(state, command, vectors)
         free_directions = vectors[:, :1] if len(free) == 1 else vectors[:, free]  # θ_o is column 0
