@@ -43,8 +43,9 @@ def test_the_kinematics_become_valid_and_right(run):
     assert run.summary["s_h_err_mm"]["median"] < 3.0
 
 
-def test_the_rough_lever_is_nan_until_both_are_known_to_a_centimetre():
-    """From the estimate's own means and standard deviations (closed form)."""
+def test_the_rough_lever_is_nan_until_both_are_known_to_a_centimetre_and_the_hand_is_off_centre():
+    """From the estimate's own means and standard deviations (closed form): known to 1 cm, and
+    ``|ŝ_h|`` beyond two of its standard deviations (else the naive ``s_h = 0`` is as good)."""
     estimate = Estimator().update(0.0, (0.0, 0.1, 0.2), (10.0, 0.0, 0.0))
     known = dataclasses.replace(
         estimate, kinematics_mean=(0.2, -0.05, 0.0, 0.12), kinematics_std=(0.01, 0.009, 0.02, 0.01)
@@ -53,3 +54,7 @@ def test_the_rough_lever_is_nan_until_both_are_known_to_a_centimetre():
     for std in ((0.01, 0.011, 0.0, 0.01), (0.01, 0.005, 0.0, math.nan), (0.01, 0.005, 0.0, 0.02)):
         loose = dataclasses.replace(known, kinematics_std=std)
         assert all(np.isnan(closed_loop.rough_lever(loose)))
+    centred = dataclasses.replace(known, kinematics_mean=(0.2, -0.017, 0.0, 0.12))
+    assert all(np.isnan(closed_loop.rough_lever(centred)))  # 0.017 < 2 × 0.009
+    off = dataclasses.replace(known, kinematics_mean=(0.2, 0.019, 0.0, 0.12))
+    assert closed_loop.rough_lever(off) == (0.019, 0.12)
