@@ -56,10 +56,13 @@ class BufferedFunction:
     arrays shaped like the function's outputs (vectors as 1-D, matrices as 2-D).
     """
 
-    def __init__(self, function: ca.Function) -> None:
+    def __init__(self, function: ca.Function, prepare: Callable[[Binding], None] | None = None) -> None:
+        """``prepare``, if given, is called with each thread's buffers once they are bound (to fill
+        inputs that never change)."""
         self.function = _densified(function)
         self._n_in = self.function.n_in()
         self._local = threading.local()
+        self._prepare = prepare
 
     @property
     def name(self) -> str:
@@ -71,8 +74,11 @@ class BufferedFunction:
         try:
             return self._local.binding
         except AttributeError:
-            self._local.binding = _bind(self.function)
-            return self._local.binding
+            binding = _bind(self.function)
+            if self._prepare is not None:
+                self._prepare(binding)
+            self._local.binding = binding
+            return binding
 
     def __call__(self, *args: ArrayLike) -> tuple[np.ndarray, ...]:
         if len(args) != self._n_in:
@@ -94,6 +100,11 @@ class BufferedFunction:
             flat[0] = value
         binding.evaluate()
         return binding.shaped_outputs[0].copy()
+
+    def failed(self) -> bool:
+        """Whether this thread's last evaluation reported failure (generated code returns non-zero,
+        e.g. where a QP solver fails, and leaves its outputs as they were: stale). Costs ~1 µs."""
+        return self.buffers().buffer.ret() != 0
 
     def call_flat(self, flat_input: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """Fast path for one-input, one-output functions: copy ``flat_input`` in, return output 0.

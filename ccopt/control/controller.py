@@ -42,6 +42,10 @@ The step is scaled down to a maximum per tick (a target speed limit, :attr:`Cont
 times the control period; scaled as a whole, so that it keeps the direction that balances the wrench)
 and reported with the QP's diagnostics; an infeasible tick still returns the least-violating step and
 says so.
+
+The tick runs as one call of generated C (:mod:`ccopt.control.tick`: this module's instance, the QP
+and the checks, in CasADi symbols); :meth:`Controller.build_instance` is the readable reference it is
+tested against, and the path taken with any other QP back end.
 """
 
 from __future__ import annotations
@@ -54,7 +58,8 @@ import numpy as np
 
 from ccopt import contact, modes, validation
 from ccopt.contact import N_CONE_ROWS
-from ccopt.control.qp import INFEASIBLE_SLACK, QPInstance, QPSolution, QPSolver, make_solver
+from ccopt.control import tick
+from ccopt.control.qp import INFEASIBLE_SLACK, QPInstance, QPSolution, QPSolver
 from ccopt.hand import Hand
 from ccopt.modes import Motion
 
@@ -227,18 +232,24 @@ class Command:
 @dataclass(frozen=True)
 class ControlOutput:
     """One tick's result: the hand-frame target change and the QP's diagnostics; ``solved`` is False
-    when the solver gave no finite step (the step is then zero, the solution infeasible)."""
+    when the solver gave no finite step (the step is then zero, the solution infeasible). ``packed``
+    is the tick's QP instance in the solver's packed layout (:attr:`instance` unpacks it)."""
 
     step: np.ndarray
     solution: QPSolution
-    instance: QPInstance
+    packed: np.ndarray
     solved: bool = True
 
+    @property
+    def instance(self) -> QPInstance:
+        """The tick's QP instance (:meth:`Controller.build_instance`'s), unpacked afresh."""
+        return QPInstance.from_packed(self.packed, tick.N_ROWS, tick.N_TERMS)
 
-def _failed(solution: QPSolution) -> QPSolution:
+
+def _failed(backend: str) -> QPSolution:
     """A solver's answer that is not a finite step, as the controller reports it: no step, no wrench
     change, infinite slack, infeasible."""
-    return QPSolution(np.zeros(3), np.zeros(3), math.inf, False, solution.backend)
+    return QPSolution(np.zeros(3), np.zeros(3), math.inf, False, backend)
 
 
 def _scaled(solution: QPSolution, instance: QPInstance, factor: float) -> QPSolution:
@@ -293,14 +304,24 @@ _FORCE_ACTIVE = np.ones(2, dtype=bool)
 _FORCE_ACTIVE.flags.writeable = False
 
 
+_STEP, _SOLUTION_STEP, _WRENCH_CHANGE, _PACKED = (
+    tick.OUTPUTS[name] for name in ("step", "solution_step", "wrench_change", "packed")
+)
+_SLACK, _SOLVED = tick.OUTPUTS["slack"].start, tick.OUTPUTS["solved"].start
+
+
 class Controller:
-    """Builds and solves the impedance-target QP each tick (one compiled solver, reused).
+    """Builds and solves the impedance-target QP each tick.
+
+    By default a tick is one call of generated C (:mod:`ccopt.control.tick`: the instance, the QP
+    and the checks of :meth:`update`); given a ``solver``, it is :meth:`build_instance` (the readable
+    reference, in NumPy) solved by that back end.
 
     Args:
         hand: the robot's hand (its impedance ``K`` and normal-force limits).
         period: control period, s (the per-second gains become per-tick fractions).
         params: gains and limits.
-        solver: the QP back end (the code-generated one by default).
+        solver: a QP back end for the reference path; None: the compiled tick.
     """
 
     def __init__(
@@ -315,7 +336,7 @@ class Controller:
         validation.check_types((("hand", self.hand, Hand), ("params", self.params, ControllerParams)))
         self.period = validation.positive("control period", period)
         self.params.check_hand(self.hand)
-        self.solver = solver if solver is not None else make_solver("codegen")
+        self.solver = solver
         self._convergence = 1.0 - math.exp(-self.params.convergence_rate * self.period)
         self._force_gain = 1.0 - math.exp(-self.params.force_rate * self.period)
         self._max_step = np.asarray(self.params.max_speed) * self.period
@@ -326,6 +347,37 @@ class Controller:
         self._units = np.array([p.length_unit, p.length_unit, p.angle_unit])
         self._row_gains = np.full(N_CONE_ROWS + 2, self.params.row_gains)
         self._row_gains[N_CONE_ROWS:] = 1.0
+        k_x, k_y, _ = self.hand.stiffness
+        self._angle_free_stiffness = k_x == k_y  # K in the hand frame is then the same at every angle
+        fixed = self.hand.stiffness_in_hand_frame(0.0) if self._angle_free_stiffness else None
+        self._tick = tick.Tick(self._tick_parameters(), fixed) if solver is None else None
+
+    def _tick_parameters(self) -> np.ndarray:
+        """The constants of the compiled tick (:data:`ccopt.control.tick.PARAMETERS`)."""
+        p = self.params
+        values = {
+            "regularization": p.regularization,
+            "weights": p.weights,
+            "hold_weights": p.hold_weights,
+            "convergence": self._convergence,
+            "force_gain": self._force_gain,
+            "force_weight": p.force_weight,
+            "push_weight": p.push_weight,
+            "push_force": p.push_force,
+            "friction_margin": p.friction_margin,
+            "torque_margin": p.torque_margin,
+            "ground_margin": p.ground_margin,
+            "min_margin": p.min_margin,
+            "statics_margin_share": p.statics_margin_share,
+            "units": self._units,
+            "force_unit": p.force_unit,
+            "row_gains": self._row_gains,
+            "force_bounds": self._force_bounds,
+            "max_step": self._max_step,
+        }
+        return np.concatenate(
+            [np.atleast_1d(np.asarray(values[name], dtype=float)) for name, _ in tick.PARAMETERS]
+        )
 
     @property
     def step_units(self) -> np.ndarray:
@@ -338,18 +390,77 @@ class Controller:
         A step the solver returns that is not finite gives no change (the target holds), ``solved``
         False and a solution flagged infeasible with infinite slack: never a NaN for the plant. A step
         beyond the speed limit is scaled down to it, and the solution reported is the scaled step's."""
+        if self._tick is not None:
+            return self._compiled_update(state, command)
         instance = self.build_instance(state, command)
         solution = self.solver.solve(instance)
         step = self._units * solution.step  # the QP's variable is the step in task units
         if not all(map(math.isfinite, step.tolist())):  # the solver failed: no motion this tick
-            held = {"step": np.zeros(3), "solution": _failed(solution), "instance": instance, "solved": False}
-            return validation.trusted(ControlOutput, held)
+            return self._held(instance, solution.backend)
         excess = max(map(truediv, map(abs, step.tolist()), self._max_step_list))
         if excess > 1.0:  # scaled, not clipped: the step keeps its direction, and with it the balance
             step = step / excess  # of the wrench it predicts; the solution reported is the scaled step's
             solution = _scaled(solution, instance, 1.0 / excess)
-        solved = {"step": step, "solution": solution, "instance": instance, "solved": True}
+        solved = {"step": step, "solution": solution, "packed": instance.packed, "solved": True}
         return validation.trusted(ControlOutput, solved)
+
+    @staticmethod
+    def _held(instance: QPInstance, backend: str) -> ControlOutput:
+        """The output of a tick whose solver gave no finite step: no motion, flagged infeasible."""
+        held = {"step": np.zeros(3), "solution": _failed(backend), "packed": instance.packed, "solved": False}
+        return validation.trusted(ControlOutput, held)
+
+    def _compiled_update(self, state: ControlInput, command: Command) -> ControlOutput:
+        """:meth:`update` as one call of the compiled tick: the same step, to rounding."""
+        angle = state.hand_angle
+        stiffness = None if self._angle_free_stiffness else self.hand.stiffness_in_hand_frame(angle)
+        out = self._tick(
+            (command.motion, self._slide_begun(state, command)),
+            stiffness,
+            self._tick_scalars(state, command),
+            state.wrench,
+            state.coordinates,
+            command.targets,
+            state.cone_rows,
+            state.cone_bounds,
+            state.row_valid,
+        )
+        if out is None:  # the solver failed: no motion this tick
+            return self._held(self.build_instance(state, command), self._tick.backend)
+        slack = out.item(_SLACK)
+        solution = validation.trusted(
+            QPSolution,
+            {
+                "step": out[_SOLUTION_STEP],
+                "wrench_change": out[_WRENCH_CHANGE],
+                "slack": slack,
+                "feasible": slack <= INFEASIBLE_SLACK,
+                "backend": self._tick.backend,
+            },
+        )
+        fields = {
+            "step": out[_STEP],
+            "solution": solution,
+            "packed": out[_PACKED],
+            "solved": out.item(_SOLVED) != 0.0,
+        }
+        return validation.trusted(ControlOutput, fields)
+
+    def _tick_scalars(self, state: ControlInput, command: Command) -> tuple[float, ...]:
+        """The compiled tick's scalars (:data:`ccopt.control.tick.SCALARS`), resolved as
+        :meth:`build_instance` resolves them: the naive ``v_θ``, the default force targets."""
+        p = self.params
+        s_h, d = state.s_h, state.d
+        if not (math.isfinite(s_h) and math.isfinite(d)):  # not even roughly known: the naive v_θ
+            s_h, d = 0.0, p.d_guess
+        force_target = p.normal_force if state.force_target is None else state.force_target
+        f_t_target = state.tangential_target
+        if f_t_target is None:
+            f_t_target = state.wrench[1] if command.wrench is None else command.wrench[1]
+        margin = state.statics_margin
+        known = margin is not None and math.isfinite(margin)
+        margin = margin if known else 0.0
+        return (state.hand_angle, s_h, d, state.mu_h, state.l_h, force_target, f_t_target, margin, known)
 
     def build_instance(self, state: ControlInput, command: Command) -> QPInstance:
         """The QP of this tick (exposed for studies and tests)."""
@@ -412,15 +523,21 @@ class Controller:
         slide's coordinate joins once the slide has begun (moved by ``slide_onset`` the commanded way
         since the step began), held on its friction boundary by the removed row.
         """
-        removed = modes.REMOVED_ROWS[command.motion]
-        if removed and command.start is not None:
-            driven = modes.driven_coordinate(command.motion)
-            delta = command.targets[driven] - command.start[driven]
-            progress = (state.coordinates[driven] - command.start[driven]) * math.copysign(1.0, delta)
-            if progress >= self.params.slide_onset:
-                balance = np.array((vectors[:, modes.THETA_O], state.cone_rows[removed[0]]))
-                return [modes.THETA_O, driven], balance
+        if self._slide_begun(state, command):
+            removed = modes.REMOVED_ROWS[command.motion]
+            balance = np.array((vectors[:, modes.THETA_O], state.cone_rows[removed[0]]))
+            return [modes.THETA_O, modes.driven_coordinate(command.motion)], balance
         return [modes.THETA_O], vectors[:, modes.THETA_O : modes.THETA_O + 1].T
+
+    def _slide_begun(self, state: ControlInput, command: Command) -> bool:
+        """Whether the commanded slide has begun: its coordinate has moved by ``slide_onset`` (m) the
+        commanded way since the step began (never for a hold or a pivot, nor without a start)."""
+        if not modes.REMOVED_ROWS[command.motion] or command.start is None:
+            return False
+        driven = modes.driven_coordinate(command.motion)
+        delta = command.targets[driven] - command.start[driven]
+        progress = (state.coordinates[driven] - command.start[driven]) * math.copysign(1.0, delta)
+        return bool(progress >= self.params.slide_onset)
 
     def _margins(self, f_n: float, state: ControlInput) -> np.ndarray:
         """Per-row margins ``b − margin``: strict inequalities for the rows the command keeps."""

@@ -35,6 +35,7 @@ import shutil
 import subprocess
 import tempfile
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal, Protocol
@@ -162,6 +163,26 @@ class QPInstance:
         object.__setattr__(instance, "packed", _pack(instance, len(rows), len(directions)))
         return instance
 
+    @classmethod
+    def from_packed(cls, packed: np.ndarray, n_rows: int, n_terms: int) -> QPInstance:
+        """The instance of ``n_rows`` rows and ``n_terms`` terms whose packed vector is ``packed``
+        (:data:`N_PARAMETERS`,), unchecked like :meth:`unchecked`: the inverse of the packing."""
+        fields = {name: np.array(packed[_SLICES[name]]) for name, _ in _LAYOUT}
+        rows = fields["rows"].reshape(3, MAX_ROWS).T[:n_rows]  # column-major slots, transposed back
+        directions = fields["directions"].reshape(3, MAX_TERMS).T[:n_terms]
+        return cls.unchecked(
+            stiffness=fields["stiffness"].reshape(3, 3).T,
+            wrench=fields["wrench"],
+            rows=np.ascontiguousarray(rows),
+            bounds=fields["bounds"][:n_rows],
+            gains=fields["gains"][:n_rows],
+            active=fields["active"][:n_rows] != 0.0,
+            regularization=float(fields["regularization"][0]),
+            directions=np.ascontiguousarray(directions),
+            weights=fields["weights"][:n_terms],
+            targets=fields["targets"][:n_terms],
+        )
+
 
 def _check_matrix(name: str, value: ArrayLike, max_rows: int, cols: int) -> int:
     shape = np.shape(value)
@@ -236,12 +257,30 @@ class QPSolver(Protocol):
 # --- the formulation, written once ---------------------------------------------------------------
 
 
-def _unpack(parameters: ca.SX) -> dict[str, ca.SX]:
+def unpack_symbols(parameters: ca.SX) -> dict[str, ca.SX]:
+    """The fields of a symbolic packed parameter vector, each shaped as its slot of :data:`_LAYOUT`
+    (the inverse of :func:`pack_symbols`, padding included)."""
     out = {}
     for name, shape in _LAYOUT:
         flat = parameters[_SLICES[name]]
         out[name] = ca.reshape(flat, *shape) if len(shape) == 2 else flat
     return out
+
+
+def pack_symbols(fields: dict[str, ca.SX]) -> ca.SX:
+    """The packed parameter vector (:data:`N_PARAMETERS`,) of symbolic instance fields, laid out as
+    :func:`_pack` lays out a :class:`QPInstance`'s: ``rows``, ``bounds``, ``gains``, ``active`` of
+    ``m ≤ MAX_ROWS`` rows and ``directions``, ``weights``, ``targets`` of ``k ≤ MAX_TERMS`` terms
+    (column vectors and matrices), padded with zeros to their slots."""
+    slots = []
+    for name, shape in _LAYOUT:
+        value = ca.SX(fields[name])
+        if len(shape) == 2 and value.shape != shape:  # a (m, 3) block in the first rows of its slot
+            value = ca.vertcat(value, ca.SX.zeros(shape[0] - value.shape[0], shape[1]))
+        elif len(shape) == 1 and value.shape[0] != shape[0]:
+            value = ca.vertcat(value, ca.SX.zeros(shape[0] - value.shape[0]))
+        slots.append(ca.vec(value))
+    return ca.vertcat(*slots)
 
 
 def build_qp_matrices() -> ca.Function:
@@ -252,7 +291,7 @@ def build_qp_matrices() -> ca.Function:
     a strict interior (``0 ≤ 0`` rows would break Slater's condition).
     """
     parameters = ca.SX.sym("p", N_PARAMETERS)
-    q = _unpack(parameters)
+    q = unpack_symbols(parameters)
     hessian = 2.0 * q["regularization"] * ca.SX.eye(3)
     gradient = ca.SX.zeros(3)
     for i in range(MAX_TERMS):
@@ -328,7 +367,10 @@ class CasadiQPSolver:
         self._z = np.zeros(4)
 
     def solve(self, instance: QPInstance) -> QPSolution:
-        return _solution(self._function.call_flat(instance.packed, self._z), instance, self.backend)
+        z = self._function.call_flat(instance.packed, self._z)
+        if self._function.failed():  # DAQP failed in generated code: no step (not the last one's)
+            z = np.full(4, np.nan)
+        return _solution(z, instance, self.backend)
 
 
 class CodegenQPSolver(CasadiQPSolver):
@@ -453,36 +495,43 @@ def _compile_command(compiler: str, source: Path, library: Path) -> list[str]:
 
 
 def compile_function(
-    function: ca.Function, cache_dir: Path | None = None, compiler: str | None = None
+    function: ca.Function | Sequence[ca.Function],
+    cache_dir: Path | None = None,
+    compiler: str | None = None,
+    name: str | None = None,
 ) -> tuple[Path, bool]:
-    """Generate C for ``function``, compile it once, and return ``(library path, cache hit)``.
+    """Generate C for ``function`` (or several functions, into one library named ``name``), compile
+    it once, and return ``(library path, cache hit)``; each function loads from it by its name.
 
     The library is named by a hash of the generated source, the CasADi version and the compile
     command, so a changed formulation compiles anew. Compilation writes to a temporary file and
     renames it into place, so concurrent processes never load a half-written library. Raises
     ``RuntimeError`` if no compiler is found or compilation fails.
     """
+    functions = [function] if isinstance(function, ca.Function) else list(function)
+    name = name or functions[0].name()
     compiler = compiler or os.environ.get("CC") or "cc"
     if shutil.which(compiler) is None:
         raise RuntimeError(f"no C compiler {compiler!r} on PATH")
-    generator = ca.CodeGenerator(f"{function.name()}.c", {"with_header": False})
-    generator.add(function)
+    generator = ca.CodeGenerator(f"{name}.c", {"with_header": False})
+    for each in functions:
+        generator.add(each)
     source = generator.dump()
     cache = Path(cache_dir) if cache_dir is not None else default_cache_dir()
     command_key = " ".join(_compile_command(compiler, Path("src.c"), Path("lib.so")))
     digest = hashlib.sha256(f"{ca.__version__}\n{command_key}\n{source}".encode()).hexdigest()[:20]
-    library = cache / f"{function.name()}_{digest}.so"
+    library = cache / f"{name}_{digest}.so"
     if library.exists():
         return library, True
     cache.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(dir=cache) as workdir:
-        source_path = Path(workdir) / f"{function.name()}.c"
+        source_path = Path(workdir) / f"{name}.c"
         source_path.write_text(source)
         partial = Path(workdir) / library.name
         result = subprocess.run(
             _compile_command(compiler, source_path, partial), capture_output=True, text=True
         )
         if result.returncode != 0:
-            raise RuntimeError(f"compiling the QP failed: {result.stderr.strip()[:500]}")
+            raise RuntimeError(f"compiling {name} failed: {result.stderr.strip()[:500]}")
         os.replace(partial, library)
     return library, False
