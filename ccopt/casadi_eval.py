@@ -1,17 +1,27 @@
-"""Low-overhead numeric evaluation of CasADi functions from NumPy.
+"""Low-overhead numeric evaluation of CasADi functions from NumPy, and their generated C.
 
 A plain ``casadi.Function`` call with NumPy arguments converts every argument to ``DM`` and costs
 tens of microseconds. :class:`BufferedFunction` binds preallocated, contiguous NumPy arrays to a
 ``FunctionBuffer`` once and then evaluates through a ctypes pointer: a call is a few array copies
 plus the function's own work. Each thread binds its own buffers on first use, so one instance (for
 example a module-level one) can be shared by the threads of a Dask worker.
+
+:func:`compile_function` generates C for functions, compiles it once with the system C compiler and
+caches the library on disk by a hash of the source (``$CCOPT_CACHE_DIR``, else
+``$XDG_CACHE_HOME/ccopt``, else ``~/.cache/ccopt``); ``casadi.external`` loads it.
 """
 
 from __future__ import annotations
 
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
@@ -138,3 +148,75 @@ def _squeeze(array: np.ndarray) -> np.ndarray:
     if cols == 1:
         return array.reshape(rows)
     return array
+
+
+# --- code generation and the on-disk cache ---------------------------------------------------------
+
+
+def default_cache_dir() -> Path:
+    """Where compiled functions live: ``$CCOPT_CACHE_DIR``, ``$XDG_CACHE_HOME/ccopt`` or
+    ``~/.cache/ccopt``."""
+    if os.environ.get("CCOPT_CACHE_DIR"):
+        return Path(os.environ["CCOPT_CACHE_DIR"])
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "ccopt"
+
+
+def _compile_command(compiler: str, source: Path, library: Path) -> list[str]:
+    casadi_dir = Path(ca.__file__).parent
+    return [
+        compiler,
+        "-O3",
+        "-shared",
+        "-fPIC",
+        str(source),
+        "-o",
+        str(library),
+        f"-I{casadi_dir / 'include'}",
+        f"-I{casadi_dir / 'include' / 'daqp'}",
+        str(casadi_dir / "libdaqpstat.a"),
+        "-lm",
+    ]
+
+
+def compile_function(
+    function: ca.Function | Sequence[ca.Function],
+    cache_dir: Path | None = None,
+    compiler: str | None = None,
+    name: str | None = None,
+) -> tuple[Path, bool]:
+    """Generate C for ``function`` (or several functions, into one library named ``name``), compile
+    it once, and return ``(library path, cache hit)``; each function loads from it by its name.
+
+    The library is named by a hash of the generated source, the CasADi version and the compile
+    command, so a changed formulation compiles anew. Compilation writes to a temporary file and
+    renames it into place, so concurrent processes never load a half-written library. Raises
+    ``RuntimeError`` if no compiler is found or compilation fails.
+    """
+    functions = [function] if isinstance(function, ca.Function) else list(function)
+    name = name or functions[0].name()
+    compiler = compiler or os.environ.get("CC") or "cc"
+    if shutil.which(compiler) is None:
+        raise RuntimeError(f"no C compiler {compiler!r} on PATH")
+    generator = ca.CodeGenerator(f"{name}.c", {"with_header": False})
+    for each in functions:
+        generator.add(each)
+    source = generator.dump()
+    cache = Path(cache_dir) if cache_dir is not None else default_cache_dir()
+    command_key = " ".join(_compile_command(compiler, Path("src.c"), Path("lib.so")))
+    digest = hashlib.sha256(f"{ca.__version__}\n{command_key}\n{source}".encode()).hexdigest()[:20]
+    library = cache / f"{name}_{digest}.so"
+    if library.exists():
+        return library, True
+    cache.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=cache) as workdir:
+        source_path = Path(workdir) / f"{name}.c"
+        source_path.write_text(source)
+        partial = Path(workdir) / library.name
+        result = subprocess.run(
+            _compile_command(compiler, source_path, partial), capture_output=True, text=True
+        )
+        if result.returncode != 0:
+            raise RuntimeError(f"compiling {name} failed: {result.stderr.strip()[:500]}")
+        os.replace(partial, library)
+    return library, False

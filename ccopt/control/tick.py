@@ -4,7 +4,7 @@
 :mod:`ccopt.control.qp` and the checks of :meth:`~ccopt.control.controller.Controller.update` (a step
 that is not finite holds the target; a step beyond the speed limit is scaled down to it, its wrench
 change and slack evaluated again), written once more in CasADi symbols and generated into one C
-library, compiled and cached on disk by :func:`ccopt.control.qp.compile_function`. There is one
+library, compiled and cached on disk by :func:`ccopt.casadi_eval.compile_function`. There is one
 function per contact case (:data:`CASES`: the commanded motion, and for a slide whether it has begun),
 because the case sets the shape of the model (one free direction or two) and which terms and rows
 the QP has. ``build_instance`` stays the readable reference; the tests hold this path to it.
@@ -28,7 +28,7 @@ import casadi as ca
 import numpy as np
 
 from ccopt import contact, modes
-from ccopt.casadi_eval import Binding, BufferedFunction
+from ccopt.casadi_eval import Binding, BufferedFunction, compile_function
 from ccopt.contact import N_CONE_ROWS
 from ccopt.control import qp
 from ccopt.modes import Motion
@@ -312,7 +312,7 @@ def load_tick_functions(
     Once per process and cache."""
     functions = build_tick_functions()
     try:
-        library, _ = qp.compile_function(list(functions.values()), cache_dir, compiler, name="ccopt_tick")
+        library, _ = compile_function(list(functions.values()), cache_dir, compiler, name="ccopt_tick")
     except (OSError, RuntimeError, subprocess.CalledProcessError) as error:
         warnings.warn(
             f"code-generated controller tick unavailable ({error}); evaluating it in process",
