@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from ccopt.estimation import p2_step
 from ccopt.estimation.quantile import P2Quantile, P2QuantileBank, marker_levels
 
 SAMPLES = 100_000
@@ -114,3 +115,32 @@ def test_bad_types_raise_type_error():
         P2QuantileBank(0.5, 2.0)
     with pytest.raises(ValueError, match="size"):
         P2QuantileBank(0.5, 0)
+
+
+def test_bank_equals_p2_bit_for_bit_over_blocks_and_signed_zeros():
+    """Two blocks of generated C (70 streams) against one P2Quantile per stream, every value and
+    its sign: samples rounded to a tenth give ties and −0.0."""
+    rng = np.random.default_rng(7)
+    samples = np.round(rng.standard_t(3, (1500, 70)) * 0.3, 1)
+    bank, scalars = P2QuantileBank(0.985, 70), [P2Quantile(0.985) for _ in range(70)]
+    for row in samples:
+        bank.add(row)
+        for scalar, sample in zip(scalars, row.tolist(), strict=True):
+            scalar.add(sample)
+    expected = np.array([s.value for s in scalars])
+    assert np.array_equal(bank.values, expected) and np.array_equal(
+        np.signbit(bank.values), np.signbit(expected)
+    )
+    assert np.any((samples == 0.0) & np.signbit(samples))  # −0.0 among the samples
+
+
+def test_the_p2_step_without_a_compiler_runs_in_process_with_the_same_result(tmp_path):
+    with pytest.warns(RuntimeWarning, match="evaluating it in process"):
+        in_process = p2_step.p2_step(tmp_path, "no-such-cc")
+    rng = np.random.default_rng(8)
+    heights = np.sort(rng.normal(size=(p2_step.BLOCK, 5)), axis=1)
+    positions = np.tile(np.array([0.0, 3.0, 6.0, 8.0, 9.0]), (p2_step.BLOCK, 1))
+    arguments = (heights.T, positions.T, rng.normal(size=(1, p2_step.BLOCK)), np.array(marker_levels(0.9)))
+    compiled = p2_step.p2_step()
+    for ours, theirs in zip(in_process(*arguments), compiled(*arguments), strict=True):
+        np.testing.assert_array_equal(ours, theirs)

@@ -12,8 +12,8 @@ ignored.
 
 :class:`P2Quantile` tracks one quantile of a scalar stream in plain Python floats (the fastest form
 for one stream); :class:`P2QuantileBank` tracks the same level of many streams that receive one
-sample each per step (e.g. support values in many directions): the bookkeeping is vectorised in
-NumPy and the (rare, for tail levels) marker moves run per stream.
+sample each per step (e.g. support values in many directions), with the same results, in generated
+C (:mod:`ccopt.estimation.p2_step`).
 """
 
 from __future__ import annotations
@@ -22,9 +22,8 @@ import math
 
 import numpy as np
 
+from ccopt.estimation.p2_step import BLOCK, N_MARKERS, advance
 from ccopt.validation import check_count, check_number
-
-N_MARKERS = 5
 
 
 def check_level(level: object, name: str = "level") -> float:
@@ -57,8 +56,7 @@ def marker_levels(level: float) -> list[float]:
 
     Jain & Chlamtac place the inner markers at ``p/2`` and ``(1 + p)/2``; the placement here is the
     same for ``1/3 ≤ p ≤ 2/3`` and keeps them closer to ``p`` in the tails (e.g. 0.98, 0.99, 0.995
-    for ``p = 0.99``), which was as accurate or more on every distribution tested and makes marker
-    moves rare for tail levels (the bank exploits that).
+    for ``p = 0.99``), which was as accurate or more on every distribution tested.
     """
     return [0.0, level - min(level / 2.0, 1.0 - level), level, level + min((1.0 - level) / 2.0, level), 1.0]
 
@@ -153,13 +151,9 @@ def _adjust_marker(heights: list[float], positions: list[float], marker: int, la
 class P2QuantileBank:
     """The ``level`` quantile of ``size`` parallel streams, each fed one sample per :meth:`add`.
 
-    The same algorithm as :class:`P2Quantile`, stream by stream (the results are identical), with
-    positions kept relative to the newest sample (``n_i − (n − 1)``): a sample below a stream's
-    marker 1 then changes nothing but the minimum, and marker ``i`` of such a stream can only move
-    down, once its desired position ``(n − 1) p_i`` has fallen a full position behind, or up, if the
-    marker above moved up in the previous step and made room. Only those streams and markers are
-    visited, one by one; for tail levels they are a few percent of the streams
-    (:func:`marker_levels`).
+    The same algorithm as :class:`P2Quantile`, stream by stream, with the same results: the first
+    five samples here, then one call of generated C per :data:`~ccopt.estimation.p2_step.BLOCK`
+    streams (:mod:`ccopt.estimation.p2_step`).
 
     Args:
         level: the quantile level ``p ∈ (0, 1)``.
@@ -170,11 +164,11 @@ class P2QuantileBank:
         self.level = check_level(level)
         self.size = check_count("size", size)
         self._count = 0
-        self._heights = np.zeros((N_MARKERS, self.size))
-        self._relative = np.zeros((3, self.size))  # positions of markers 1–3 minus that of marker 4
-        self._levels = marker_levels(self.level)
-        self._due = np.zeros((3, 1))  # relative position at which each marker falls a position behind
-        self._moved_up: list[int] = []  # streams where a marker moved up in the last step
+        padded = -(-self.size // BLOCK) * BLOCK  # whole blocks; the padding streams see zeros
+        self._heights = np.zeros((padded, N_MARKERS))  # stream by stream: a block is contiguous
+        self._positions = np.zeros((padded, N_MARKERS))
+        self._samples = np.zeros(padded)
+        self._levels = np.array(marker_levels(self.level))
 
     @property
     def count(self) -> int:
@@ -187,66 +181,22 @@ class P2QuantileBank:
         if self._count == 0:
             return np.full(self.size, np.nan)
         if self._count <= N_MARKERS:  # exact, as P2Quantile's
-            columns = np.sort(self._heights[: self._count], axis=0).T.tolist()
-            return np.array([exact_quantile(column, self.level) for column in columns])
-        return self._heights[2].copy()
+            rows = np.sort(self._heights[: self.size, : self._count], axis=1).tolist()
+            return np.array([exact_quantile(row, self.level) for row in rows])
+        return self._heights[: self.size, 2].copy()
 
     def add(self, samples: np.ndarray) -> None:
         """Feed one sample per stream (float array of shape ``(size,)``); skipped if any is non-finite."""
         if not np.isfinite(samples).all():
             return
         self._count += 1
-        heights, relative = self._heights, self._relative
+        self._samples[: self.size] = samples
         if self._count <= N_MARKERS:
-            heights[self._count - 1] = samples
+            self._heights[:, self._count - 1] = self._samples
             if self._count == N_MARKERS:
-                heights.sort(axis=0)
-                relative[:] = np.arange(-3.0, 0.0)[:, None]
+                self._heights.sort(axis=1)
+                self._positions[:] = np.arange(float(N_MARKERS))
             return
-        top = float(self._count - 1)  # position of marker 4 (the newest maximum)
-        np.minimum(heights[0], samples, out=heights[0])
-        reached = np.flatnonzero(samples >= heights[1]).tolist()
-        for inner in range(3):  # lag = top p_i − n_i ≤ −1
-            self._due[inner, 0] = top * (self._levels[inner + 1] - 1.0) + 1.0
-        behind = np.flatnonzero(relative >= self._due).tolist()
-        # A marker that moved up last step may have unblocked the one below it: revisit those streams.
-        revisit = [stream for stream in self._moved_up if stream not in reached]
-        moved_up = [stream for stream in reached if self._step(stream, samples.item(stream), top)]
-        moved_up += [stream for stream in revisit if self._adjust_all(stream, top)]
-        visited = set(reached).union(revisit)
-        for flat in behind:  # marker-major: markers 1, 2, 3 of a stream in turn
-            inner, stream = divmod(flat, self.size)
-            if stream not in visited:
-                self._adjust(inner + 1, stream, top)
-        self._moved_up = moved_up
-
-    def _step(self, stream: int, sample: float, top: float) -> bool:
-        """One P² step of a stream the sample reached (``sample ≥`` its marker 1); True if a marker rose."""
-        heights, relative = self._heights, self._relative
-        if sample > heights.item(4, stream):
-            heights[4, stream] = sample
-        for marker in (1, 2, 3):
-            if sample >= heights.item(marker, stream):
-                relative[marker - 1, stream] -= 1.0
-        return self._adjust_all(stream, top)
-
-    def _adjust_all(self, stream: int, top: float) -> bool:
-        """Markers 1, 2, 3 of ``stream`` in turn; True if one moved up."""
-        moves = [self._adjust(marker, stream, top) for marker in (1, 2, 3)]
-        return max(moves) > 0.0
-
-    def _adjust(self, marker: int, stream: int, top: float) -> float:
-        """:func:`_adjust_marker` on one marker of one stream; returns its move (−1, 0, +1)."""
-        relative = self._relative
-        position = relative.item(marker - 1, stream) + top
-        lag = top * self._levels[marker] - position
-        if -1.0 < lag < 1.0:
-            return 0.0
-        below = 0.0 if marker == 1 else relative.item(marker - 2, stream) + top
-        above = top if marker == 3 else relative.item(marker, stream) + top
-        local_heights = [self._heights.item(index, stream) for index in (marker - 1, marker, marker + 1)]
-        local_positions = [below, position, above]
-        _adjust_marker(local_heights, local_positions, 1, lag)
-        self._heights[marker, stream] = local_heights[1]
-        relative[marker - 1, stream] = local_positions[1] - top
-        return local_positions[1] - position
+        for start in range(0, len(self._samples), BLOCK):
+            block = slice(start, start + BLOCK)
+            advance(self._heights[block], self._positions[block], self._samples[block], self._levels)
