@@ -108,25 +108,23 @@ def test_the_target_holds_still_from_the_first_reading_a_dropout_loses():
 
 
 def failing_after(monkeypatch, start: float, until: float = np.inf) -> None:
-    """The QP back end returns NaN for every solve while the plant's time is in [start, until)."""
-    from ccopt.control import qp
+    """The controller's compiled tick reports a failed QP solve (no output) while the plant's time
+    is in [start, until)."""
+    from ccopt.control import tick
 
-    solve, clock = qp.CasadiQPSolver.solve, {"time": 0.0}
+    call, clock = tick.Tick.__call__, {"time": 0.0}
     advance = closed_loop._Loop._advance_plant
 
     def timed(self):
         advance(self)
         clock["time"] = self.plant.time
 
-    def broken(self, instance):
-        solution = solve(self, instance)
-        if start <= clock["time"] < until:
-            bad = np.full(3, np.nan)
-            return qp.QPSolution(bad, bad, np.nan, False, solution.backend)
-        return solution
+    def broken(self, *inputs):
+        out = call(self, *inputs)
+        return None if start <= clock["time"] < until else out
 
     monkeypatch.setattr(closed_loop._Loop, "_advance_plant", timed)
-    monkeypatch.setattr(qp.CasadiQPSolver, "solve", broken)
+    monkeypatch.setattr(tick.Tick, "__call__", broken)
 
 
 def test_a_solver_that_keeps_failing_ends_the_run_as_an_error(monkeypatch):
