@@ -260,7 +260,8 @@ def enforced_rows(estimate: Estimate) -> np.ndarray:
     tilt, while the mode classifier stays conservative about it all the same."""
     enforced = np.array(estimate.row_valid, dtype=bool)
     for row, fitted in zip(GROUND_ROWS, estimate.ground_fitted, strict=True):
-        enforced[row] &= bool(fitted)
+        if not fitted:
+            enforced[row] = False
     return enforced
 
 
@@ -594,6 +595,7 @@ class _Loop:
         )
         self.target = np.array(self.plant.target(), dtype=float)
         self.velocity = np.zeros(3)
+        self.timestep = self.plant.timestep
         self.pending = list(params.perturbations)
         self.last_solution: tuple[float, bool] = (0.0, True)
         self.statics_period = params.ticks(params.statics_hz) * params.plant_params.timestep
@@ -642,8 +644,8 @@ class _Loop:
         return self._finish(wallclock.perf_counter() - start)
 
     def _advance_plant(self) -> None:
-        plant, dt = self.plant, self.plant.timestep
-        self.target = self.target + self.velocity * dt
+        plant = self.plant
+        self.target = self.target + self.velocity * self.timestep
         plant.set_target(self.target, self.velocity)
         while self.pending and plant.time >= self.pending[0].time:
             push = self.pending.pop(0)
@@ -657,7 +659,7 @@ class _Loop:
         self.estimate = self.estimator.update(time, pose, wrench, commanded)
         if self.estimate.kinematics_valid:
             self.last_usable = self.estimate
-        self.hand_pose = pose if bool(np.all(np.isfinite(pose))) else None
+        self.hand_pose = pose if all(map(math.isfinite, pose.tolist())) else None
         if self._lost():  # a dropout: the target holds still from this reading on, not from the next
             self.velocity[:] = 0.0  # control tick (up to a control period of ramping on the last step)
         if self.sensed % self.params.record_stride == 0:

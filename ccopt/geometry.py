@@ -117,7 +117,7 @@ def wrench_world_to_hand(theta_h: float, wrench_world: ArrayLike) -> Array:
     Written out (``f_n = e_n·f``, ``f_t = e_t·f``) because plants and sensors call it every tick.
     """
     s, c = math.sin(theta_h), math.cos(theta_h)
-    f_x, f_y, torque = wrench_world
+    f_x, f_y, torque = np.asarray(wrench_world, dtype=float).tolist()
     return np.array([s * f_x - c * f_y, c * f_x + s * f_y, torque])
 
 

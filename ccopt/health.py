@@ -44,6 +44,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
 from numpy.typing import ArrayLike
 
 from ccopt.estimation.quantile import check_count, check_number
@@ -161,9 +162,9 @@ class SensorHealth:
         (world, m, rad) at ``time`` (s). Returns (and keeps in :attr:`health`) the health so far."""
         if not self.health.ok:
             return self.health
-        x_h, y_h, theta_h = (float(v) for v in hand_pose)
-        f_n, f_t, torque = (float(v) for v in hand_wrench)
-        x_tar, y_tar = float(target[0]), float(target[1])
+        x_h, y_h, theta_h = np.asarray(hand_pose, dtype=float).tolist()
+        f_n, f_t, torque = np.asarray(hand_wrench, dtype=float).tolist()
+        x_tar, y_tar = np.asarray(target, dtype=float).tolist()[:2]
         if math.isnan(self._wrench_seen):
             self._wrench_seen = self._pose_seen = time
         wrench_ok = math.isfinite(f_n) and math.isfinite(f_t) and math.isfinite(torque)

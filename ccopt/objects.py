@@ -10,6 +10,7 @@ The library holds generic shapes (``triangle``, ``square``, ``rectangle``, ``pen
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -149,9 +150,16 @@ class PlanarObject:
         """Moment of inertia about the centroid, out-of-plane axis, kg·m² (uniform lamina)."""
         return geometry.lamina_inertia(self.vertices, self.mass)
 
+    @functools.cached_property  # the plants' ground truth reads one every record sample
+    def face_normals(self) -> np.ndarray:
+        """Outward unit normals of every face in the body frame (``n_faces × 2``, read-only)."""
+        normals = np.array([geometry.face_normal(self.vertices, face) for face in range(self.n_faces)])
+        normals.flags.writeable = False
+        return normals
+
     def face_normal(self, face: int) -> np.ndarray:
         """Outward unit normal of ``face`` in the body frame."""
-        return geometry.face_normal(self.vertices, self.face_index(face))
+        return self.face_normals[self.face_index(face)].copy()
 
     def face_length(self, face: int) -> float:
         """Length of ``face``, m."""

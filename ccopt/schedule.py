@@ -32,6 +32,7 @@ object may not allow) and ``smoke`` (pivots both ways, for CI).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import math
 from collections.abc import Callable
@@ -97,12 +98,12 @@ class Step:
                 limit = f"{largest:.4g} {unit}"
                 raise ValueError(f"a {self.kind} step's {name} must be at most {limit}, got {value!r}")
 
-    @property
+    @functools.cached_property  # the loop reads it every tick; a frozen step never changes
     def motion(self) -> Motion:
         """The commanded motion of :mod:`ccopt.modes`."""
         return modes.motion_of(self.kind, self.delta)
 
-    @property
+    @functools.cached_property
     def coordinate(self) -> int | None:
         """Index into ``(θ_o, s_h, s_g)`` of the coordinate this step changes (None for a hold)."""
         return modes.driven_coordinate(self.kind)
