@@ -422,3 +422,50 @@ def test_one_known_ground_side_gives_the_other_as_its_mirror_image(side):
     faces, offsets, known = ground_friction_faces(rows, bounds, (False, False))
     assert known == (False, False)
     np.testing.assert_array_equal(faces, rows)
+
+
+# --- a hull whose sliding forces lie at one end of its chord --------------------------------------
+
+
+def pushes_that_slid_at_one_force(rng: np.random.Generator) -> np.ndarray:
+    """A goal run's ground forces, as on the paper triangle: pivots pressing down (``f_y`` −9 to
+    −20 N, ``|f_x|`` ≤ 1.5 N), then on each side a push building from the pivots' forces to the true
+    face at one depth, where the ground slid (the sliding forces, on the face, at one point)."""
+    pivots = np.column_stack((rng.uniform(-1.5, 1.5, 2000), rng.uniform(-20.0, -9.0, 2000)))
+    parts = [pivots]
+    for side in (1, -1):
+        sliding = sliding_point(side)
+        ramp = np.linspace(0.0, 1.0, 300)[:, None] * (sliding - [0.0, -12.0]) + [0.0, -12.0]
+        parts += [ramp, np.repeat(sliding[None], 250, axis=0)]
+    forces = np.vstack(parts)
+    assert inside_true_cone(forces)
+    return forces
+
+
+def sliding_point(side: int, depth: float = 17.0) -> np.ndarray:
+    """The hand force on the true face of side ``side`` (+1: +x) with the ground pressed ``depth`` N
+    beyond the weight."""
+    return -contact.weight(MASS) + np.array([side * MU_G * depth, -depth])
+
+
+def test_a_chord_crossing_up_below_the_origin_is_turned_through_the_origin():
+    """Each side's chord runs from the pivots' weakest forces to the sliding point: on its own it
+    crosses "up" about 7 N below the origin, where no friction face can (the weight is above), and
+    puts a weak push, 0.7 N sideways at 8.2 N down, past the face though the true cone holds it with
+    over 5 N to spare (the paper triangle's goal run tried such ground slides at 2.6° and rolled the
+    hand). The face is the line through the sliding point and the origin instead: through the
+    sliding forces (within the noise), the weak push well inside it, and beyond the sliding forces'
+    depth inside the true face by at most ``μ_g m g``."""
+    cone = fitted_cone(pushes_that_slid_at_one_force(np.random.default_rng(7)), np.random.default_rng(8)).cone
+    rows, bounds = true_rows()
+    weight = -contact.weight(MASS)[1]
+    assert cone.fitted == (True, True)
+    for side, sign in ((0, 1), (1, -1)):
+        normal, offset = cone.A[side], cone.b[side]
+        assert offset >= 0.0  # crosses "up" at or above the origin
+        assert abs(normal @ sliding_point(sign) - offset) <= 3.0 * NOISE
+        weak = np.array([sign * 0.7, -8.2])
+        assert bounds[side] - rows[side] @ weak > 5.0  # the true cone holds it
+        assert offset - normal @ weak > 3.0  # and so does the estimated row
+        deep = sliding_point(sign, 30.0)
+        assert offset - normal @ deep <= MU_G * weight + 3.0 * NOISE

@@ -20,7 +20,9 @@ not inflate it). A fit every ``refit_interval`` then
    consecutive edges whose normals both point to that side, neither nearly up (the hull's top,
    where the hand force is smallest) nor down (its bottom, :data:`FACE_COSINE_RANGE`); the face
    grows over neighbouring edges of the same kind and direction, and its chord (first vertex to
-   last) gives the row.
+   last) gives the row; a chord that crosses "up" below the origin, where no friction face can
+   (the apex is the weight reversed), turns about its far end through the origin
+   (:func:`_through_origin`).
 
 World up, not a direction estimated from the data, tells the faces from the hull's top: the hull's
 centroid (an earlier choice) moves towards wherever the hand has pushed most, and after a slide one
@@ -335,8 +337,35 @@ def _friction_face(
         end += 1
     while end - start < count - 1 and extends(start - 1):
         start -= 1
-    row = _chord(vertices[(start - 1) % count], vertices[end % count])
+    ends = (vertices[(start - 1) % count], vertices[end % count])
+    row = _chord(*ends)
+    if row is not None and row[1] < 0.0:
+        row = _through_origin(ends, right)
     return row if row is not None and low <= row[0][0] * up[0] + row[0][1] * up[1] <= high else None
+
+
+def _through_origin(ends: tuple[tuple[float, float], ...], right: tuple[float, float]) -> Row2 | None:
+    """The face of a chord ``ends`` that crosses "up" below the origin: the line through the origin and
+    the chord's end farther from it, outward to ``right``; None if that end is the origin.
+
+    A friction face crosses the vertical through the origin at the weight reversed, ``m g`` above
+    it: no face crosses below. A chord that does is where the forces seen end, not the face: e.g. a
+    hull whose only sliding forces lie at one end of the chord, its slope set by the sticking forces
+    next to them (on a goal run of the paper triangle, ``μ_g`` 0.8, the chords after a slide each way
+    had the slopes of ``μ_g`` 1.25 and 2.8 and crossed 3 and 10 N below the origin: they predicted a
+    ground slide at a 2.6° tilt, 13.8 N short on the true object, which rolled the hand four times).
+    The farther end is the largest force pushed on that side, where a slide was seen; the line
+    through it and the origin is the face of a weightless object, which the friction of any object
+    that slid there lies within by ``μ_g m g`` at most.
+    """
+    far = max(ends, key=lambda point: math.hypot(*point))
+    norm = math.hypot(*far)
+    if norm == 0.0:
+        return None
+    normal = (-far[1] / norm, far[0] / norm)
+    if normal[0] * right[0] + normal[1] * right[1] < 0.0:
+        normal = (-normal[0], -normal[1])
+    return normal, 0.0, math.dist(*ends)
 
 
 def _chord(start: tuple[float, float], end: tuple[float, float]) -> Row2 | None:
