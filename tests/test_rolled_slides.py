@@ -1,12 +1,13 @@
 """Goal slides end `rolled` when the hand leaves flush contact, and a slide is reached only when the
-object truly did it: the `paper` goals on the paper triangle (planar plant, seed 0), judged by the
-simulator's truth.
+object truly did it: the `paper` goals on the paper triangle and pentagon (planar plant, seed 0),
+judged by the simulator's truth.
 
-On this run the planner tries ground slides where the statics the estimate knows allow them while
-its hand friction is still a lower bound; at 2.7° the hand ends up on the face's end. Before slides
-had the `rolled` ending, the hand stayed there for 2.5 s, then rolled and slid 10 mm on the face,
-and the kinematics (which take the hand as flush) read that as the ground slide: `reached`, with the
-true ground contact unmoved.
+The planner tries ground slides where the statics the estimate knows allow them while its hand
+friction is still a lower bound; on the triangle at 2.7° the hand ended up on the face's end. Before
+slides had the `rolled` ending, the hand stayed there for 2.5 s, then rolled and slid 10 mm on the
+face, and the kinematics (which take the hand as flush) read that as the ground slide: `reached`,
+with the true ground contact unmoved. Since the ground hull's faces are held above the origin the
+triangle's ground slides all slide; the pentagon's run still ends six of them `rolled`.
 """
 
 from __future__ import annotations
@@ -22,10 +23,18 @@ from ccopt.objects import make_object
 from ccopt.schedule import load_schedule
 
 
+def paper_goals(name: str) -> closed_loop.RunResult:
+    return closed_loop.run(make_object(name), load_schedule("paper"), closed_loop.LoopParams(), seed=0)
+
+
 @pytest.fixture(scope="module")
 def result() -> closed_loop.RunResult:
-    params = closed_loop.LoopParams()
-    return closed_loop.run(make_object("paper-triangle"), load_schedule("paper"), params, seed=0)
+    return paper_goals("paper-triangle")
+
+
+@pytest.fixture(scope="module")
+def pentagon() -> closed_loop.RunResult:
+    return paper_goals("paper-pentagon")
 
 
 def window(result: closed_loop.RunResult, step: closed_loop.StepResult) -> slice:
@@ -53,10 +62,11 @@ EDGE_SHARE = 0.75
 half-length (the estimate calls a hand whose torque nears its limit maybe rolling)."""
 
 
-def test_a_goal_slide_that_ends_rolled_truly_had_the_hand_at_or_over_its_edge(result):
+def test_a_goal_slide_that_ends_rolled_truly_had_the_hand_at_or_over_its_edge(pentagon):
     """Each `rolled` slide: by the truth, the hand was off flush or its centre of pressure was in the
     outer quarter of the hand, and the slide's coordinate moved less than its 2 mm tolerance (the roll
     was caught before it passed for a slide)."""
+    result = pentagon
     rolled = [step for step in goal_slides(result) if step.status == "rolled"]
     assert rolled
     for step in rolled:
