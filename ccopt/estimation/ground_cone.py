@@ -140,6 +140,7 @@ class GroundConeEstimator:
         self._last_sample = -math.inf
         self._last_fit = -math.inf
         self.cone = fit_ground_cone(self.directions, np.full(self.params.directions, np.nan), self.params, 0)
+        self._fitted_to: tuple[bytes, bool, bool] | None = None  # what self.cone was fitted to
 
     @property
     def sample_count(self) -> int:
@@ -164,8 +165,16 @@ class GroundConeEstimator:
             self.refit()
 
     def refit(self) -> GroundCone:
-        """Fit the rows to the current support values now; returns (and stores) :attr:`cone`."""
-        self.cone = fit_ground_cone(self.directions, self._support.values, self.params, self.sample_count)
+        """Fit the rows to the current support values now; returns (and stores) :attr:`cone`.
+
+        The fit is a function of the support values and of whether any and ``min_samples`` forces
+        were seen: while none of them changed (the values bit for bit: in a third to a half of the
+        fits of a closed-loop run no support value moved), the last cone is the fit."""
+        support, count = self._support.values, self.sample_count
+        fitted_to = (support.tobytes(), count > 0, count >= self.params.min_samples)
+        if fitted_to != self._fitted_to:
+            self.cone = fit_ground_cone(self.directions, support, self.params, count)
+            self._fitted_to = fitted_to
         return self.cone
 
 
@@ -232,29 +241,31 @@ def half_plane_polygon(
             return math.nan, math.nan
         return (uy[j] * h[i] - uy[i] * h[j]) / det, (ux[i] * h[j] - ux[j] * h[i]) / det
 
-    def outside(k: int, point: tuple[float, float]) -> bool:
-        return ux[k] * point[0] + uy[k] * point[1] > h[k]
-
     lines: deque[int] = deque()  # active lines, by angle
     corners: deque[tuple[float, float]] = deque()  # corners[i]: lines[i] meets lines[i + 1]
-    for k in range(len(h)):
-        while corners and outside(k, corners[-1]):
+    for k, (a, b, c) in enumerate(zip(ux, uy, h, strict=True)):  # "outside" of line k inline
+        while corners and a * corners[-1][0] + b * corners[-1][1] > c:
             lines.pop()
             corners.pop()
-        while corners and outside(k, corners[0]):
+        while corners and a * corners[0][0] + b * corners[0][1] > c:
             lines.popleft()
             corners.popleft()
         if lines:
             corners.append(corner(lines[-1], k))
         lines.append(k)
-    while len(corners) >= 2 and outside(lines[0], corners[-1]):
+    while len(corners) >= 2 and _outside(ux, uy, h, lines[0], corners[-1]):
         lines.pop()
         corners.pop()
-    while len(corners) >= 2 and outside(lines[-1], corners[0]):
+    while len(corners) >= 2 and _outside(ux, uy, h, lines[-1], corners[0]):
         lines.popleft()
         corners.popleft()
     corners.append(corner(lines[-1], lines[0]))
     return list(lines), list(corners)
+
+
+def _outside(ux: list[float], uy: list[float], h: list[float], k: int, point: tuple[float, float]) -> bool:
+    """Whether ``point`` is strictly outside half-plane ``k`` (:func:`half_plane_polygon`)."""
+    return ux[k] * point[0] + uy[k] * point[1] > h[k]
 
 
 def _cone(rows: list[Row2], valid: bool, up: tuple[float, float], fitted: tuple[bool, bool]) -> GroundCone:
