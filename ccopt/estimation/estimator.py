@@ -266,7 +266,7 @@ class Estimator:
                 f"hand_pose and hand_wrench must have shape (3,), got {pose.shape} and {wrench.shape}"
             )
         values = [time, *pose.tolist(), *wrench.tolist()]
-        if not all(map(float.__ge__, SAMPLE_BOUNDS, map(abs, values))):  # also False for NaN
+        if not _within_bounds(values):
             return self._skip(time)
         _, x_h, y_h, theta_h, f_n, f_t, torque = values
         axes = geometry.hand_axes(theta_h)
@@ -361,6 +361,22 @@ class Estimator:
         if self._last is None:
             return _empty_estimate(time, self.friction, self.ground)
         return dataclasses.replace(self._last, time=float(time), skipped=True)
+
+
+def _within_bounds(values: list[float]) -> bool:
+    """Whether each of a sample's ``(time, x_h, y_h, θ_h, f_n, f_t, τ)`` is within its
+    :data:`SAMPLE_BOUNDS` (False for NaN)."""
+    time, x_h, y_h, theta_h, f_n, f_t, torque = values
+    b_time, b_x, b_y, b_theta, b_n, b_t, b_torque = SAMPLE_BOUNDS
+    return (
+        abs(time) <= b_time
+        and abs(x_h) <= b_x
+        and abs(y_h) <= b_y
+        and abs(theta_h) <= b_theta
+        and abs(f_n) <= b_n
+        and abs(f_t) <= b_t
+        and abs(torque) <= b_torque
+    )
 
 
 def _sliding_way(commanded: ContactMode | None, fallback: int | None = 0) -> int | None:

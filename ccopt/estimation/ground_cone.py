@@ -41,12 +41,14 @@ the ground's tilt, and their intersection (the apex) is the object's weight reve
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
 
+from ccopt import validation
 from ccopt.estimation.quantile import P2QuantileBank, check_count, check_level, check_number
 from ccopt.geometry import WORLD_UP
 
@@ -199,7 +201,7 @@ def _fit_rows(
 ) -> tuple[list[Row2], tuple[bool, bool]] | None:
     """The rows (friction faces where found, else prior rows touching the hull) and which are
     faces; None unless the support values, the hull's corners and the rows are all finite."""
-    if not np.all(np.isfinite(support)):
+    if not np.isfinite(support).all():
         return None
     active, vertices = half_plane_polygon(directions, support)
     if not math.isfinite(sum(x + y for x, y in vertices)):
@@ -285,7 +287,18 @@ def _cone(rows: list[Row2], valid: bool, up: tuple[float, float], fitted: tuple[
     up_array = np.array(up)
     for array in (normals, offsets, apex, up_array):
         array.flags.writeable = False
-    return GroundCone(A=normals, b=offsets, valid=valid, fitted=fitted, mu_g=mu_g, apex=apex, up=up_array)
+    return validation.trusted(  # every field, each well formed by construction
+        GroundCone,
+        {
+            "A": normals,
+            "b": offsets,
+            "valid": valid,
+            "fitted": fitted,
+            "mu_g": mu_g,
+            "apex": apex,
+            "up": up_array,
+        },
+    )
 
 
 def _prior_rows(up: tuple[float, float], mu_prior: float, vertices: list[tuple[float, float]]) -> list[Row2]:
@@ -294,7 +307,7 @@ def _prior_rows(up: tuple[float, float], mu_prior: float, vertices: list[tuple[f
     rows = []
     for side in (1.0, -1.0):
         normal = ((side * up[1] + mu_prior * up[0]) / scale, (-side * up[0] + mu_prior * up[1]) / scale)
-        offset = max(normal[0] * x + normal[1] * y for x, y in vertices)
+        offset = max([normal[0] * x + normal[1] * y for x, y in vertices])
         rows.append((normal, offset, 0.0))
     return rows
 
@@ -330,10 +343,10 @@ def _friction_face(
         nx * right[0] + ny * right[1] > 0.0 and low <= nx * up[0] + ny * up[1] <= high for nx, ny, _ in edges
     ]
     count, best, first = len(edges), 0.0, -1
-    for index, (_, _, length) in enumerate(edges):
-        pair = length + edges[(index + 1) % count][2]
-        if candidate[index] and candidate[(index + 1) % count] and pair > best:
-            best, first = pair, index
+    for index in itertools.compress(range(count), candidate):
+        following = (index + 1) % count
+        if candidate[following] and edges[index][2] + edges[following][2] > best:
+            best, first = edges[index][2] + edges[following][2], index
     seed = _chord(vertices[first - 1], vertices[(first + 1) % count]) if first >= 0 else None
     if seed is None:
         return None

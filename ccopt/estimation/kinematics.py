@@ -359,9 +359,9 @@ class KinematicEstimator:
             math.isnan(last) or abs(math.remainder(pose[2] - last, math.tau)) >= self.params.excitation_angle
         )
         row, value = self._tangent_row(pose, frame)
-        prediction = self._predict(row, value)
         gate = self._hand_slip_gate_squared if hand_may_slide else self._gate_squared
-        if not hand_sticks or self._s_h_released or not self._within(prediction, gate):
+        prediction = None if not hand_sticks or self._s_h_released else self._predict(row, value)
+        if prediction is None or not self._within(prediction, gate):
             self._release(S_H)  # reported sliding, unknown, or slid although reported sticking
             self._scalar_update(row, value)
             self._s_h_released = False
