@@ -197,3 +197,30 @@ def _hull(points: np.ndarray) -> list[int]:
         return out[:-1]
 
     return chain(order) + chain(order[::-1])
+
+
+def same_cone(a, b) -> bool:
+    """Whether two cones hold the same values bit for bit (NaN equal to NaN)."""
+    arrays = ("A", "b", "apex", "up")
+    same_arrays = all(getattr(a, name).tobytes() == getattr(b, name).tobytes() for name in arrays)
+    same_mu = np.float64(a.mu_g).tobytes() == np.float64(b.mu_g).tobytes()
+    return same_arrays and same_mu and (a.valid, a.fitted) == (b.valid, b.fitted)
+
+
+def test_every_refit_is_the_fit_of_the_support_values_it_sees():
+    """A refit keeps the last cone while the support values did not move (the fit's inputs are the
+    same), and otherwise fits anew: either way the cone is ``fit_ground_cone`` of the current values."""
+    params = GroundConeParams(min_samples=40)
+    estimator = GroundConeEstimator(params)
+    samples = forces(0.8, 0.3, 0.0, 400, (1, -1), np.random.default_rng(7))
+    kept = refitted = 0
+    for k, force in enumerate(samples):
+        before = estimator.cone
+        estimator.update(k * INTERVAL, force)
+        cone = estimator.refit()
+        support, count = estimator._support.values, estimator.sample_count
+        assert same_cone(cone, fit_ground_cone(estimator.directions, support, params, count))
+        kept += cone is before
+        refitted += cone is not before
+        assert estimator.refit() is cone  # nothing changed since
+    assert kept > 0 and refitted > 0

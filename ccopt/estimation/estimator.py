@@ -57,11 +57,11 @@ from ccopt.modes import ContactConfiguration, ContactMode, HandGeometry
 
 def _flat_cone_rows() -> BufferedFunction:
     """:data:`ccopt.contact.cone_rows` and the margins ``b − N w`` on one flat input
-    ``(θ_h, μ_h, l_h, vec(A) (column-major), b, w)`` with one flat output ``(vec(N), b, b − N w)``,
+    ``(θ_h, μ_h, l_h, vec(A) (column-major), b, w)`` with one flat output ``(N row by row, b, b − N w)``,
     for :meth:`BufferedFunction.call_flat`."""
     flat = ca.SX.sym("cone_input", 12)
     n_rows, b = contact.cone_rows(flat[0], flat[1], flat[2], ca.reshape(flat[3:7], 2, 2), flat[7:9])
-    output = ca.vertcat(ca.vec(n_rows), b, b - n_rows @ flat[9:12])
+    output = ca.vertcat(ca.vec(n_rows.T), b, b - n_rows @ flat[9:12])
     return BufferedFunction(ca.Function("cone_rows_flat", [flat], [output]))
 
 
@@ -194,6 +194,7 @@ class Estimate:
     compliance_std: float = math.nan
     gravity: GravityEstimate = UNKNOWN_GRAVITY
     hand_slid: bool = False
+
     @property
     def friction_faces(self) -> tuple[np.ndarray, np.ndarray, tuple[bool, bool]]:
         """``(A, b, known)``, the ground's friction faces as far as they are known
@@ -265,52 +266,57 @@ class Estimator:
                 f"hand_pose and hand_wrench must have shape (3,), got {pose.shape} and {wrench.shape}"
             )
         values = [time, *pose.tolist(), *wrench.tolist()]
-        if not all(map(float.__ge__, SAMPLE_BOUNDS, map(abs, values))):  # also False for NaN
+        if not _within_bounds(values):
             return self._skip(time)
-        theta_h, f_n, f_t = values[3], values[4], values[5]
+        _, x_h, y_h, theta_h, f_n, f_t, torque = values
         axes = geometry.hand_axes(theta_h)
-        e_n, e_t = axes
         in_contact = f_n > self.params.contact_force
+        friction = self.friction
         if in_contact:
-            self.friction.update(f_n, f_t)
+            friction.update(f_n, f_t)
             self.ground.update(time, geometry.hand_to_world(axes, f_n, f_t))
-        friction, ground = self.friction, self.ground.cone
-        cone_rows, cone_bounds, margins = self._cone(theta_h, friction.mu_h, friction.l_h_eff, ground, wrench)
-        valid = [friction.valid, friction.valid, True, True, ground.valid, ground.valid]  # order: Row
-        margin_list = margins.tolist()
-        modes = self.classifier.update(time, margin_list, valid)
-        likely = self.kinematic_classifier.update(time, margin_list, valid)
-        ground_may_slide, hand_may_slide = _unacted_reports(likely, commanded)
+        ground = self.ground.cone
+        cone = self._cone(theta_h, friction.mu_h, friction.l_h_eff, ground, wrench)
+        valid, row_valid = _ROW_VALID[friction.valid, ground.valid]
+        margins = cone[2].tolist()
+        modes = self.classifier.update(time, margins, valid)
+        likely = self.kinematic_classifier.update(time, margins, valid)
+        kept, ground_may_slide, hand_may_slide = _kinematic_reports(likely, commanded)
         kinematics = self.kinematics.update(
             pose,
-            e_n,
-            e_t,
-            kinematic_modes(commanded_modes(likely, commanded), ground),
+            *axes,
+            kinematic_modes(kept, ground),
             in_contact,
             ground_may_slide,
-            torque=values[6],
-            hand_may_slide=hand_may_slide,
-            normal_force=f_n,
+            torque,
+            hand_may_slide,
+            f_n,
         )
         theta_o = kinematics.theta_o
         if in_contact and kinematics.theta_o_valid and likely.hand_geometry == HandGeometry.FLUSH:
             theta_o = self.theta_filter.update(time, theta_o)
         else:
             self.theta_filter.reset()
-        cone = (cone_rows, cone_bounds, margins)
-        parts = (valid, friction, ground, modes, in_contact, theta_o, kinematics)
         gravity = self.gravity.update(
-            theta_o, values[1:4], values[4:7], kinematics, self.kinematics.ground_contact()
+            theta_o, [x_h, y_h, theta_h], [f_n, f_t, torque], kinematics, self.kinematics.ground_contact()
         )
+        slid = self._slid(commanded, kinematics, theta_h)
         self._last = _assemble(
             time,
             wrench,
             cone,
-            *parts,
-            rough=self._rough(theta_o, kinematics),
-            gravity=gravity,
-            slid=self._slid(commanded, kinematics, theta_h),
-            hand_slid=any(self.hand_slides.slid),
+            row_valid,
+            friction,
+            ground,
+            modes,
+            in_contact,
+            theta_o,
+            kinematics,
+            False,
+            self._rough(theta_o, kinematics),
+            gravity,
+            slid,
+            self.hand_slides.slid[0] or self.hand_slides.slid[1],
         )
         return self._last
 
@@ -338,7 +344,7 @@ class Estimator:
         out = _CONE_ROWS.call_flat(flat)
         out.flags.writeable = False
         rows = 3 * N_CONE_ROWS
-        return out[:rows].reshape(3, N_CONE_ROWS).T, out[rows : rows + N_CONE_ROWS], out[rows + N_CONE_ROWS :]
+        return out[:rows].reshape(N_CONE_ROWS, 3), out[rows : rows + N_CONE_ROWS], out[rows + N_CONE_ROWS :]
 
     def _slid(
         self, commanded: ContactConfiguration | None, kinematics: KinematicEstimate, theta_h: float
@@ -355,6 +361,22 @@ class Estimator:
         if self._last is None:
             return _empty_estimate(time, self.friction, self.ground)
         return dataclasses.replace(self._last, time=float(time), skipped=True)
+
+
+def _within_bounds(values: list[float]) -> bool:
+    """Whether each of a sample's ``(time, x_h, y_h, θ_h, f_n, f_t, τ)`` is within its
+    :data:`SAMPLE_BOUNDS` (False for NaN)."""
+    time, x_h, y_h, theta_h, f_n, f_t, torque = values
+    b_time, b_x, b_y, b_theta, b_n, b_t, b_torque = SAMPLE_BOUNDS
+    return (
+        abs(time) <= b_time
+        and abs(x_h) <= b_x
+        and abs(y_h) <= b_y
+        and abs(theta_h) <= b_theta
+        and abs(f_n) <= b_n
+        and abs(f_t) <= b_t
+        and abs(torque) <= b_torque
+    )
 
 
 def _sliding_way(commanded: ContactMode | None, fallback: int | None = 0) -> int | None:
@@ -462,6 +484,15 @@ def _unacted_reports(
     return ground, hand
 
 
+@functools.cache  # 27 × 10 pairs, as commanded_modes
+def _kinematic_reports(
+    likely: ContactConfiguration, commanded: ContactConfiguration | None
+) -> tuple[ContactConfiguration, bool, bool]:
+    """``(modes, ground_may_slide, hand_may_slide)`` for the kinematics: the most likely modes with
+    every contact ``commanded`` keeps kept (:func:`commanded_modes`), and :func:`_unacted_reports`."""
+    return commanded_modes(likely, commanded), *_unacted_reports(likely, commanded)
+
+
 def kinematic_modes(modes: ContactConfiguration, ground: GroundCone) -> ContactConfiguration:
     """The configuration the kinematic estimator works under.
 
@@ -475,9 +506,9 @@ def kinematic_modes(modes: ContactConfiguration, ground: GroundCone) -> ContactC
     contacts sliding is never commanded. Hand reports go through unchanged (a reported hand slide
     releases ``s_h``).
     """
-    side = {ContactMode.SLIDE_POS: 0, ContactMode.SLIDE_NEG: 1}.get(modes.ground_mode)
-    if side is None:
+    if modes.ground_mode == ContactMode.STICK:
         return modes
+    side = 0 if modes.ground_mode == ContactMode.SLIDE_POS else 1
     trusted = ground.valid and ground.fitted[side] and modes.hand_mode == ContactMode.STICK
     return modes if trusted else _GROUND_STICKING[modes.hand_mode, modes.hand_geometry]
 
@@ -490,35 +521,49 @@ _GROUND_STICKING = {
 """Every configuration with the ground sticking, by ``(hand mode, hand geometry)`` (immutable)."""
 
 
+def _read_only(values: tuple[bool, ...]) -> np.ndarray:
+    array = np.array(values)
+    array.flags.writeable = False
+    return array
+
+
+_ROW_VALID = {
+    (hand, ground): (valid, _read_only(valid))
+    for hand in (False, True)
+    for ground in (False, True)
+    for valid in [(hand, hand, True, True, ground, ground)]  # order: Row
+}
+"""Which cone rows are estimated, by whether the hand friction and the ground rows are: as a tuple
+(for the classifiers) and as the read-only array of an :class:`Estimate` (shared: it is immutable)."""
+
+
 def _assemble(
     time: float,
     wrench: np.ndarray,
     cone: tuple[np.ndarray, np.ndarray, np.ndarray],
-    valid: list[bool],
+    row_valid: np.ndarray,
     friction: HandFrictionEstimator,
     ground: GroundCone,
     modes: ContactConfiguration,
     in_contact: bool,
     theta_o: float,
     kinematics: KinematicEstimate,
-    skipped: bool = False,
-    *,
-    rough: tuple[tuple[float, ...], tuple[float, ...]] = ((math.nan,) * 4, (math.nan,) * 4),
-    gravity: GravityEstimate = UNKNOWN_GRAVITY,
-    slid: tuple[bool, bool] = (False, False),
-    hand_slid: bool = False,
+    skipped: bool,
+    rough: tuple[tuple[float, ...], tuple[float, ...]],
+    gravity: GravityEstimate,
+    slid: tuple[bool, bool],
+    hand_slid: bool,
 ) -> Estimate:
-    """An :class:`Estimate` from its parts (its arrays made read-only); ``rough`` is
-    ``(kinematics_mean, kinematics_std)``, ``slid`` the ways the ground was seen sliding."""
+    """An :class:`Estimate` from its parts (``wrench`` made read-only; the cone and ``row_valid``
+    are); ``rough`` is ``(kinematics_mean, kinematics_std)``, ``slid`` the ways the ground was seen
+    sliding."""
     fitted = (ground.fitted[0] and slid[0], ground.fitted[1] and slid[1])
-    row_valid = np.array(valid)
     wrench.flags.writeable = False
-    row_valid.flags.writeable = False
     cone_rows, cone_bounds, margins = cone
     return validation.trusted(  # every field, each well formed by construction
         Estimate,
         {
-            "time": float(time),
+            "time": time,
             "wrench": wrench,
             "cone_rows": cone_rows,
             "cone_bounds": cone_bounds,
@@ -528,7 +573,7 @@ def _assemble(
             "torque_lever": friction.l_h_eff,
             "ground_rows": ground.A,
             "ground_bounds": ground.b,
-            "mu_g": ground.mu_g if all(fitted) else math.nan,
+            "mu_g": ground.mu_g if fitted[0] and fitted[1] else math.nan,
             "ground_fitted": fitted,
             "hand_mode": modes.hand_mode,
             "hand_geometry": modes.hand_geometry,
@@ -562,8 +607,21 @@ def _empty_estimate(time: float, friction: HandFrictionEstimator, ground: Ground
     """The estimate before any finite sample: no cone (NaN), nothing valid, not in contact."""
     nan = np.full(N_CONE_ROWS, math.nan)
     cone = (np.full((N_CONE_ROWS, 3), math.nan), nan, nan.copy())
-    parts = (np.full(3, math.nan), cone, [False] * N_CONE_ROWS, friction, ground.cone, ContactConfiguration())
-    return _assemble(time, *parts, False, math.nan, _UNKNOWN_KINEMATICS, skipped=True)
+    parts = (np.full(3, math.nan), cone, _read_only((False,) * N_CONE_ROWS), friction, ground.cone)
+    unknown = ((math.nan,) * 4, (math.nan,) * 4)
+    return _assemble(
+        time,
+        *parts,
+        ContactConfiguration(),
+        False,
+        math.nan,
+        _UNKNOWN_KINEMATICS,
+        True,
+        unknown,
+        UNKNOWN_GRAVITY,
+        (False, False),
+        False,
+    )
 
 
 def replay(

@@ -41,12 +41,14 @@ the ground's tilt, and their intersection (the apex) is the object's weight reve
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
 
+from ccopt import validation
 from ccopt.estimation.quantile import P2QuantileBank, check_count, check_level, check_number
 from ccopt.geometry import WORLD_UP
 
@@ -140,6 +142,7 @@ class GroundConeEstimator:
         self._last_sample = -math.inf
         self._last_fit = -math.inf
         self.cone = fit_ground_cone(self.directions, np.full(self.params.directions, np.nan), self.params, 0)
+        self._fitted_to: tuple[bytes, bool, bool] | None = None  # what self.cone was fitted to
 
     @property
     def sample_count(self) -> int:
@@ -164,8 +167,16 @@ class GroundConeEstimator:
             self.refit()
 
     def refit(self) -> GroundCone:
-        """Fit the rows to the current support values now; returns (and stores) :attr:`cone`."""
-        self.cone = fit_ground_cone(self.directions, self._support.values, self.params, self.sample_count)
+        """Fit the rows to the current support values now; returns (and stores) :attr:`cone`.
+
+        The fit is a function of the support values and of whether any and ``min_samples`` forces
+        were seen: while none of them changed (the values bit for bit: in a third to a half of the
+        fits of a closed-loop run no support value moved), the last cone is the fit."""
+        support, count = self._support.values, self.sample_count
+        fitted_to = (support.tobytes(), count > 0, count >= self.params.min_samples)
+        if fitted_to != self._fitted_to:
+            self.cone = fit_ground_cone(self.directions, support, self.params, count)
+            self._fitted_to = fitted_to
         return self.cone
 
 
@@ -190,7 +201,7 @@ def _fit_rows(
 ) -> tuple[list[Row2], tuple[bool, bool]] | None:
     """The rows (friction faces where found, else prior rows touching the hull) and which are
     faces; None unless the support values, the hull's corners and the rows are all finite."""
-    if not np.all(np.isfinite(support)):
+    if not np.isfinite(support).all():
         return None
     active, vertices = half_plane_polygon(directions, support)
     if not math.isfinite(sum(x + y for x, y in vertices)):
@@ -232,29 +243,31 @@ def half_plane_polygon(
             return math.nan, math.nan
         return (uy[j] * h[i] - uy[i] * h[j]) / det, (ux[i] * h[j] - ux[j] * h[i]) / det
 
-    def outside(k: int, point: tuple[float, float]) -> bool:
-        return ux[k] * point[0] + uy[k] * point[1] > h[k]
-
     lines: deque[int] = deque()  # active lines, by angle
     corners: deque[tuple[float, float]] = deque()  # corners[i]: lines[i] meets lines[i + 1]
-    for k in range(len(h)):
-        while corners and outside(k, corners[-1]):
+    for k, (a, b, c) in enumerate(zip(ux, uy, h, strict=True)):  # "outside" of line k inline
+        while corners and a * corners[-1][0] + b * corners[-1][1] > c:
             lines.pop()
             corners.pop()
-        while corners and outside(k, corners[0]):
+        while corners and a * corners[0][0] + b * corners[0][1] > c:
             lines.popleft()
             corners.popleft()
         if lines:
             corners.append(corner(lines[-1], k))
         lines.append(k)
-    while len(corners) >= 2 and outside(lines[0], corners[-1]):
+    while len(corners) >= 2 and _outside(ux, uy, h, lines[0], corners[-1]):
         lines.pop()
         corners.pop()
-    while len(corners) >= 2 and outside(lines[-1], corners[0]):
+    while len(corners) >= 2 and _outside(ux, uy, h, lines[-1], corners[0]):
         lines.popleft()
         corners.popleft()
     corners.append(corner(lines[-1], lines[0]))
     return list(lines), list(corners)
+
+
+def _outside(ux: list[float], uy: list[float], h: list[float], k: int, point: tuple[float, float]) -> bool:
+    """Whether ``point`` is strictly outside half-plane ``k`` (:func:`half_plane_polygon`)."""
+    return ux[k] * point[0] + uy[k] * point[1] > h[k]
 
 
 def _cone(rows: list[Row2], valid: bool, up: tuple[float, float], fitted: tuple[bool, bool]) -> GroundCone:
@@ -274,7 +287,18 @@ def _cone(rows: list[Row2], valid: bool, up: tuple[float, float], fitted: tuple[
     up_array = np.array(up)
     for array in (normals, offsets, apex, up_array):
         array.flags.writeable = False
-    return GroundCone(A=normals, b=offsets, valid=valid, fitted=fitted, mu_g=mu_g, apex=apex, up=up_array)
+    return validation.trusted(  # every field, each well formed by construction
+        GroundCone,
+        {
+            "A": normals,
+            "b": offsets,
+            "valid": valid,
+            "fitted": fitted,
+            "mu_g": mu_g,
+            "apex": apex,
+            "up": up_array,
+        },
+    )
 
 
 def _prior_rows(up: tuple[float, float], mu_prior: float, vertices: list[tuple[float, float]]) -> list[Row2]:
@@ -283,7 +307,7 @@ def _prior_rows(up: tuple[float, float], mu_prior: float, vertices: list[tuple[f
     rows = []
     for side in (1.0, -1.0):
         normal = ((side * up[1] + mu_prior * up[0]) / scale, (-side * up[0] + mu_prior * up[1]) / scale)
-        offset = max(normal[0] * x + normal[1] * y for x, y in vertices)
+        offset = max([normal[0] * x + normal[1] * y for x, y in vertices])
         rows.append((normal, offset, 0.0))
     return rows
 
@@ -319,10 +343,10 @@ def _friction_face(
         nx * right[0] + ny * right[1] > 0.0 and low <= nx * up[0] + ny * up[1] <= high for nx, ny, _ in edges
     ]
     count, best, first = len(edges), 0.0, -1
-    for index, (_, _, length) in enumerate(edges):
-        pair = length + edges[(index + 1) % count][2]
-        if candidate[index] and candidate[(index + 1) % count] and pair > best:
-            best, first = pair, index
+    for index in itertools.compress(range(count), candidate):
+        following = (index + 1) % count
+        if candidate[following] and edges[index][2] + edges[following][2] > best:
+            best, first = edges[index][2] + edges[following][2], index
     seed = _chord(vertices[first - 1], vertices[(first + 1) % count]) if first >= 0 else None
     if seed is None:
         return None

@@ -359,9 +359,9 @@ class KinematicEstimator:
             math.isnan(last) or abs(math.remainder(pose[2] - last, math.tau)) >= self.params.excitation_angle
         )
         row, value = self._tangent_row(pose, frame)
-        prediction = self._predict(row, value)
         gate = self._hand_slip_gate_squared if hand_may_slide else self._gate_squared
-        if not hand_sticks or self._s_h_released or not self._within(prediction, gate):
+        prediction = None if not hand_sticks or self._s_h_released else self._predict(row, value)
+        if prediction is None or not self._within(prediction, gate):
             self._release(S_H)  # reported sliding, unknown, or slid although reported sticking
             self._scalar_update(row, value)
             self._s_h_released = False
@@ -528,11 +528,12 @@ class KinematicEstimator:
         state, cov, params = self._state, self._cov, self.params
         s_h, s_h_variance = self._hand_frame_s_h(torque)
         sqrt, nan, rough_std = math.sqrt, math.nan, params.rough_std
-        std = (
-            sqrt(max(cov[D][D], 0.0)),
-            sqrt(max(cov[X_O][X_O], 0.0)),
-            sqrt(max(cov[Y_O][Y_O], 0.0)),
-            sqrt(max(s_h_variance, 0.0)),
+        var_d, var_x, var_y, var_c = cov[D][D], cov[X_O][X_O], cov[Y_O][Y_O], cov[C][C]
+        std = (  # sqrt(max(v, 0.0)), the max written out (a call costs more): NaN and -0.0 kept
+            sqrt(0.0 if var_d < 0.0 else var_d),
+            sqrt(0.0 if var_x < 0.0 else var_x),
+            sqrt(0.0 if var_y < 0.0 else var_y),
+            sqrt(0.0 if s_h_variance < 0.0 else s_h_variance),
         )
         d, x_o, y_o = state[D], state[X_O], state[Y_O]
         if not s_h_defined:
@@ -560,7 +561,7 @@ class KinematicEstimator:
                 "rough": rough,
                 "theta_std": self._theta_std if self._theta_o_valid else nan,
                 "compliance": state[C],
-                "compliance_std": sqrt(max(cov[C][C], 0.0)),
+                "compliance_std": sqrt(0.0 if var_c < 0.0 else var_c),
                 "normal_compliance": state[K],
                 "resets": self.resets,
                 "anchor": self.anchor,

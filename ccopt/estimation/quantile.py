@@ -117,9 +117,11 @@ class P2Quantile:
             cell = 3
         for marker in range(cell + 1, N_MARKERS):
             positions[marker] += 1.0
-        top = positions[4]
+        top, levels = positions[4], self._levels
         for marker in (1, 2, 3):
-            _adjust_marker(heights, positions, marker, top * self._levels[marker] - positions[marker])
+            lag = top * levels[marker] - positions[marker]
+            if lag >= 1.0 or lag <= -1.0:  # most samples move no marker: no call
+                _adjust_marker(heights, positions, marker, lag)
 
 
 def _adjust_marker(heights: list[float], positions: list[float], marker: int, lag: float) -> None:
