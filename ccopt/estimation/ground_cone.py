@@ -364,13 +364,14 @@ def _friction_face(
     ends = (vertices[(start - 1) % count], vertices[end % count])
     row = _chord(*ends)
     if row is not None and row[1] < 0.0:
-        row = _through_origin(ends, right)
+        row = _through_origin(ends)
     return row if row is not None and low <= row[0][0] * up[0] + row[0][1] * up[1] <= high else None
 
 
-def _through_origin(ends: tuple[tuple[float, float], ...], right: tuple[float, float]) -> Row2 | None:
+def _through_origin(ends: tuple[tuple[float, float], tuple[float, float]]) -> Row2 | None:
     """The face of a chord ``ends`` that crosses "up" below the origin: the line through the origin and
-    the chord's end farther from it, outward to ``right``; None if that end is the origin.
+    the chord's end farther from it, in the chord's direction (so outward like the chord's own
+    row, :func:`_chord`) and with the chord's length; None if that end is the origin.
 
     A friction face crosses the vertical through the origin at the weight reversed, ``m g`` above
     it: no face crosses below. A chord that does is where the forces seen end, not the face: e.g. a
@@ -382,14 +383,9 @@ def _through_origin(ends: tuple[tuple[float, float], ...], right: tuple[float, f
     through it and the origin is the face of a weightless object, which the friction of any object
     that slid there lies within by ``μ_g m g`` at most.
     """
-    far = max(ends, key=lambda point: math.hypot(*point))
-    norm = math.hypot(*far)
-    if norm == 0.0:
-        return None
-    normal = (-far[1] / norm, far[0] / norm)
-    if normal[0] * right[0] + normal[1] * right[1] < 0.0:
-        normal = (-normal[0], -normal[1])
-    return normal, 0.0, math.dist(*ends)
+    start, end = ends
+    turned = _chord((0.0, 0.0), end) if math.hypot(*start) <= math.hypot(*end) else _chord(start, (0.0, 0.0))
+    return None if turned is None else (turned[0], 0.0, math.dist(start, end))
 
 
 def _chord(start: tuple[float, float], end: tuple[float, float]) -> Row2 | None:
