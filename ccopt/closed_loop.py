@@ -431,6 +431,11 @@ class _StepTracker:
         elif self.goal is not None and self._rolled(now, estimate):
             self.advance(now, estimate, hand_pose, "rolled", _ROLL_REASONS[self.step.kind])
 
+    @property
+    def rolling(self) -> bool:
+        """Whether the hand is seen off flush in a goal's motion, not yet for :data:`ROLL_TIME`."""
+        return self._rolled_since is not None
+
     def _rolled(self, now: float, estimate: Estimate) -> bool:
         """Whether the hand has been seen off flush for :data:`ROLL_TIME` (the estimate's hand
         geometry, the sign of ``θ_o − θ_h``). A pivot counts the sign opposite to its own: the object
@@ -477,7 +482,9 @@ ROLL_TIME = 0.15
 pivot's hand is classified flush; the paper square pressed flat on its face rolled the hand within
 0.1 s of the tilt where it landed; a ground slide of the paper triangle tried at 2.7° with a bold
 ``μ_h`` kept its hand on the face's end for 2.5 s, then rolled it and slid it 10 mm, which the
-kinematics read as the ground sliding)."""
+kinematics read as the ground sliding). Meanwhile a slide's target holds still
+(:attr:`_StepTracker.rolling`): pushed on, a hand that rolled on the paper pentagon's face in a hand
+slide ran 4.5 mm along it on its edge before the roll was confirmed."""
 _ROLL_REASONS = {
     "pivot": "the hand rolled: the object stopped pivoting",
     "slide_hand": "the hand rolled (or was about to) on the face's end instead of sliding",
@@ -690,6 +697,9 @@ class _Loop:
         tracker, estimate, hand_pose = self.tracker, self.estimate, self.hand_pose
         tracker.update(self.plant.time, estimate, hand_pose)
         if tracker.done:
+            return
+        if tracker.rolling and modes.REMOVED_ROWS[tracker.step.motion]:
+            self.velocity = np.zeros(3)  # a slide whose hand rolls: pushed on, the roll runs along the face
             return
         coordinates = tracker.coordinates(estimate, hand_pose)
         if coordinates is None:  # the estimate is unusable: hold where the command says

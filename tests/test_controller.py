@@ -9,6 +9,7 @@ from scipy.optimize import minimize_scalar
 from ccopt import contact
 from ccopt.contact import Row
 from ccopt.control.controller import Command, ControlInput, Controller, ControllerParams, quasi_static_maps
+from ccopt.control.qp import make_solver
 from ccopt.hand import Hand
 from ccopt.modes import Motion
 
@@ -143,6 +144,9 @@ def test_bad_parameters_raise():
         ControllerParams(convergence_rate=-1.0)
     with pytest.raises(ValueError, match="max_speed"):
         ControllerParams(max_speed=(0.1, 0.1))
+    for speed in (0.0, -0.01, float("nan")):
+        with pytest.raises(ValueError, match="slide_speed"):
+            ControllerParams(slide_speed=speed)
     with pytest.raises(ValueError, match="force limits"):
         Controller(Hand(force_limits=(15.0, 25.0)), params=ControllerParams(normal_force=10.0))
     with pytest.raises(ValueError, match="period"):
@@ -201,3 +205,30 @@ def test_a_step_scaled_to_the_speed_limit_reports_its_own_wrench_change_and_slac
     assert violation(free.instance, free.solution.step) == pytest.approx(free.solution.slack, abs=1e-6)
     assert output.solution.slack == pytest.approx(violation(output.instance, output.solution.step), abs=1e-12)
     assert output.solution.feasible == (output.solution.slack <= 1e-7)
+
+
+@pytest.mark.parametrize("path", ["compiled", "reference"])
+@pytest.mark.parametrize(
+    ("motion", "begun"),
+    [(Motion.SLIDE_GROUND_POS, False), (Motion.SLIDE_GROUND_POS, True), (Motion.SLIDE_HAND_NEG, True)],
+)
+def test_a_slide_is_driven_no_faster_than_the_slide_speed(path, motion, begun):
+    """A commanded slide's target moves at most ``slide_speed`` (m/s) along the hand's axes; any other
+    motion keeps ``max_speed``. Reference: the same tick without any limit, scaled down as a whole to
+    the slide's limits (the compiled tick and the NumPy path alike)."""
+    solver = None if path == "compiled" else make_solver("codegen")
+    current = state(wrench=(10.0, 3.0, 0.0))
+    goal = current.coordinates + np.array([0.0, -0.02, 0.03])  # far: the step is limited
+    start = current.coordinates - (np.array([0.0, 0.002, 0.002]) if begun else 0.0)
+    command = Command(motion, goal, start=start)
+    unlimited = ControllerParams(max_speed=(1e9, 1e9, 1e9), slide_speed=1e9)
+    free = Controller(params=unlimited, solver=solver).update(current, command)
+    params = ControllerParams(slide_speed=0.004)
+    limited = Controller(params=params, solver=solver)
+    limits = np.array([params.slide_speed, params.slide_speed, params.max_speed[2]]) * limited.period
+    excess = np.max(np.abs(free.step) / limits)
+    assert excess > 1.5  # the slide's limit scaled this step
+    output = limited.update(current, command)
+    np.testing.assert_allclose(output.step, free.step / excess, rtol=1e-9, atol=1e-15)
+    pivot = Command(Motion.PIVOT, current.coordinates + np.array([0.5, 0.0, 0.0]))
+    assert np.abs(limited.update(current, pivot).step[:2]).max() > 1.5 * limits[0]  # max_speed's

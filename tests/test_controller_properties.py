@@ -11,6 +11,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from ccopt import modes
 from ccopt.control.controller import Command, ControlInput, Controller, ControllerParams
 from ccopt.modes import Motion
 
@@ -66,6 +67,9 @@ def test_any_finite_input_gives_a_finite_step_within_the_speed_limit(controller,
         return
     assert np.isfinite(output.step).all()
     largest = np.asarray(controller.params.max_speed) * controller.period * (1.0 + 1e-12)
+    if modes.REMOVED_ROWS[command.motion]:  # a slide: no faster than the slide speed
+        slide = controller.params.slide_speed * controller.period * (1.0 + 1e-12)
+        largest[:2] = np.minimum(largest[:2], slide)
     assert (np.abs(output.step) <= largest).all()
     if not output.solved:  # the solver gave no finite step: nothing moves
         assert not output.solution.feasible and not output.step.any() and math.isinf(output.solution.slack)

@@ -67,11 +67,13 @@ PARAMETERS: tuple[tuple[str, int], ...] = (
     ("row_gains", N_ROWS),
     ("force_bounds", 2),
     ("max_step", 3),
+    ("slide_max_step", 3),
 )
 """The controller's constants, in the order of the ``parameters`` input: the
 :class:`~ccopt.control.controller.ControllerParams` of the same names, and ``convergence``,
 ``force_gain`` (fractions per tick), ``units`` (the step's, m, m, rad), ``row_gains``, ``force_bounds``
-(N) and ``max_step`` (m, m, rad per tick) as the controller derives them."""
+(N), ``max_step`` and ``slide_max_step`` (m, m, rad per tick; the latter while a slide is commanded)
+as the controller derives them."""
 
 SCALARS = (
     "hand_angle",
@@ -237,14 +239,14 @@ def _instance(case: Case, x: dict[str, ca.SX]) -> dict[str, ca.SX]:
     }
 
 
-def _finish(packed: ca.SX, z: ca.SX, parameters: ca.SX) -> ca.SX:
+def _finish(packed: ca.SX, z: ca.SX, parameters: ca.SX, max_step: ca.SX) -> ca.SX:
     """The output vector from the instance and the QP's ``z = (y, t)``: ``Controller.update``'s checks.
 
     A step that is not finite gives no step, no wrench change, infinite slack and ``solved = 0``; a
-    step beyond the speed limit is scaled down to it, and its wrench change and its slack on the
-    active rows are evaluated again (``_scaled``)."""
+    step beyond the speed limit ``max_step`` (the case's, m, m, rad per tick) is scaled down to it,
+    and its wrench change and its slack on the active rows are evaluated again (``_scaled``)."""
     q, instance = _split(parameters, PARAMETERS), qp.unpack_symbols(packed)
-    y, max_step = z[:3], q["max_step"]
+    y = z[:3]
     step = q["units"] * y
     solved = ca.logic_and(
         ca.logic_and(ca.fabs(step[0]) < ca.inf, ca.fabs(step[1]) < ca.inf), ca.fabs(step[2]) < ca.inf
@@ -285,8 +287,11 @@ def build_tick_functions() -> dict[Case, ca.Function]:
         ca.SX.sym("packed", qp.N_PARAMETERS),
         ca.SX.sym("z", 4),
     )
+    max_step_in = ca.SX.sym("max_step", 3)
     finish = ca.Function(
-        "ccopt_tick_finish", [packed_in, z_in, parameters], [_finish(packed_in, z_in, parameters)]
+        "ccopt_tick_finish",
+        [packed_in, z_in, parameters, max_step_in],
+        [_finish(packed_in, z_in, parameters, max_step_in)],
     )
     functions = {}
     for case in CASES:
@@ -296,7 +301,8 @@ def build_tick_functions() -> dict[Case, ca.Function]:
         )
         arguments = [ca.MX.sym(argument, *shape) for argument, shape in INPUTS]
         packed = instance(*arguments)
-        output = finish(packed, solve(packed), arguments[0])
+        limit = "slide_max_step" if modes.REMOVED_ROWS[case[0]] else "max_step"  # a slide's is slower
+        output = finish(packed, solve(packed), arguments[0], _split(arguments[0], PARAMETERS)[limit])
         functions[case] = ca.Function(
             name, arguments, [output], [argument for argument, _ in INPUTS], ["out"]
         )
