@@ -34,7 +34,7 @@ from ccopt.experiment import run_experiment
 from ccopt.objects import PlanarObject, from_vertices
 from ccopt.schedule import Goal, Schedule, exploration, reach
 from studies import runner
-from studies.robustness import fits_hand
+from studies.robustness import fits_hand, held_at_start
 
 SIDES = (3, 8)
 ACROSS = (0.06, 0.20)
@@ -43,7 +43,7 @@ MASS = (0.15, 1.0)
 MU_HAND = (0.3, 0.7)
 MU_GROUND = (0.3, 0.9)
 DRAWS = 200
-"""Polygons drawn per trial before giving up on one that holds the hand."""
+"""Polygons drawn per trial before giving up on one that holds the hand and is held."""
 GOAL_KINDS = ("tilt", "hand", "ground", "tilt+ground")
 
 
@@ -94,7 +94,8 @@ def random_goals(rng: np.random.Generator, count: int, start_deg: float) -> tupl
 
 
 def draw_trial(index: int, seed: int, goals: int, plant: str) -> GoalTrial:
-    """Trial ``index`` from ``seed``: a polygon that holds the hand, its physics, its goals."""
+    """Trial ``index`` from ``seed``: a polygon that holds the hand, and that the hand can hold where
+    the run starts it (:func:`~studies.robustness.held_at_start`), its physics, its goals."""
     rng = np.random.default_rng(seed)
     params = LoopParams(plant=plant)
     for draw in range(1, DRAWS + 1):
@@ -104,7 +105,7 @@ def draw_trial(index: int, seed: int, goals: int, plant: str) -> GoalTrial:
             obj = from_vertices(vertices, mass, mu_hand, mu_ground)
         except ValueError:  # a face shorter than the library takes (1 cm)
             continue
-        if fits_hand(obj, params):
+        if fits_hand(obj, params) and held_at_start(obj, params):
             start = math.degrees(start_config(obj, params).theta_o)
             targets = random_goals(rng, goals, start)
             corners = tuple((float(x), float(y)) for x, y in vertices)

@@ -9,9 +9,10 @@ import math
 import numpy as np
 from scipy.spatial import ConvexHull
 
-from ccopt.closed_loop import LoopParams
+from ccopt.closed_loop import LoopParams, make_plant, start_config
+from ccopt.objects import from_vertices
 from studies import goals
-from studies.robustness import fits_hand
+from studies.robustness import fits_hand, held_at_start
 
 
 def test_drawn_polygons_are_convex_within_the_ranges_and_hold_the_hand() -> None:
@@ -50,3 +51,28 @@ def test_the_quick_study_summary_recounts_its_trials(tmp_path) -> None:
             if error is not None and goal["within_tolerance"]:
                 assert abs(error) <= tolerance + 1e-9
     assert not math.isnan(summary["reached_share_of_reachable"] or 0.0)
+
+
+FALLS = ([[-0.03768, 0.09072], [-0.08028, 0.03307], [-0.08426, 0.00143]], 0.9968, 0.6411, 0.6028)
+"""A triangle a goals study once drew (vertices m, mass kg, μ_h, μ_g): its start puts the hand 60 mm
+off the ground contact, where no push of the start's force holds it."""
+STAYS = ([[0.01884, 0.05116], [-0.01604, -0.04361], [0.03688, -0.03574]], 0.6716, 0.5254, 0.4686)
+
+
+def test_a_start_the_true_statics_cannot_hold_is_not_drawn_and_falls_in_the_plant() -> None:
+    """``held_at_start`` against the simulator: the rejected object's true tilt has left its start
+    once the plant settles (it fell); the accepted one is still where the run starts it."""
+    params = LoopParams()
+    for (vertices, mass, mu_hand, mu_ground), held in ((FALLS, False), (STAYS, True)):
+        obj = from_vertices(np.array(vertices), mass, mu_hand, mu_ground)
+        assert fits_hand(obj, params)
+        assert held_at_start(obj, params) == held
+        truth = make_plant(obj, params).truth()
+        moved = abs(math.degrees(truth.theta_o - start_config(obj, params).theta_o))
+        assert (moved < 1.0) == held, moved
+
+
+def test_every_drawn_trial_is_held_at_its_start() -> None:
+    for k in range(8):
+        obj, _ = goals.build(goals.draw_trial(k, 100 + k, 4, "planar"))
+        assert held_at_start(obj, LoopParams())
