@@ -230,7 +230,9 @@ def draw(fmap: FeasibilityMap, path: str | Path | None = None, title: str = "", 
                 )
             if math.isfinite(fmap.estimated_at[0]):
                 ax.plot(math.degrees(fmap.estimated_at[0]), 1e3 * fmap.estimated_at[1], "k+", markersize=8)
-            ax.set_title(f"{motion}, {label}", fontsize=9)
+            # y given: where Matplotlib would place it (nothing is above a panel), without measuring
+            # every panel's hidden tick labels to find out (a tenth of the figure's time)
+            ax.set_title(f"{motion}, {label}", fontsize=9, y=1.0)
             if column == 0:
                 ax.set_ylabel(r"$s_h$ (mm)")
     for ax in axes[-1]:
@@ -244,8 +246,8 @@ def draw(fmap: FeasibilityMap, path: str | Path | None = None, title: str = "", 
         "estimate); grey: not judged (estimate) or no such configuration (true)",
         fontsize=8,
     )
-    if path is not None:
-        figure.savefig(path, dpi=dpi)
+    if path is not None:  # zlib's fastest level: half the time of the default, the file 25 % larger
+        figure.savefig(path, dpi=dpi, pil_kwargs={"compress_level": 1})
     return figure
 
 

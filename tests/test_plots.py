@@ -289,6 +289,53 @@ def test_write_figures_writes_images_pil_can_open(tmp_path):
     assert paths[-1].stat().st_size < 2_000_000
 
 
+def test_the_gif_shows_each_frame_as_given(tmp_path):
+    """Frames that keep only their changed pixels (the rest transparent) decode to the still image
+    with each part over its region: a square moving over a two-colour background and back, a pixel
+    changing colour and back, and a part unchanged (every colour is in the frames the palette is made
+    from: the first, the middle and the last)."""
+    still = np.zeros((40, 60, 3), dtype=np.uint8)
+    still[:, 30:] = (200, 200, 255)
+    still[35:, :] = (0, 128, 0)  # outside the region: the same in every frame
+    left, top, right, bottom = region = (2, 1, 56, 32)
+    parts = []
+    for x in (0, 10, 20, 20, 10, 0):
+        part = still[top:bottom, left:right].copy()
+        part[5:25, x + 5 : x + 25] = (255, 0, 0)
+        part[0, 0] = (255, 255, 255) if x == 20 else (0, 0, 0)
+        parts.append(part)
+    path = tmp_path / "moving.gif"
+    plots._save_gif(path, Image.fromarray(still), region, [Image.fromarray(part) for part in parts], 0.1)
+    with Image.open(path) as gif:
+        shown = []
+        for k in range(gif.n_frames):
+            gif.seek(k)
+            shown.append((np.asarray(gif.convert("RGB")), gif.info["duration"]))
+    assert [duration for _, duration in shown] == [100] * len(parts)
+    for (frame, _), part in zip(shown, parts, strict=True):
+        expected = still.copy()
+        expected[top:bottom, left:right] = part
+        np.testing.assert_array_equal(frame, expected)
+
+
+def _gif_frames(path):
+    with Image.open(path) as gif:
+        return [np.asarray(gif.seek(k) or gif.convert("RGB")) for k in range(gif.n_frames)]
+
+
+def test_the_gif_reads_back_only_what_changes_and_loses_nothing(run, tmp_path, monkeypatch):
+    """Read back over the whole canvas, the frames are the same: no moving artist or clock is drawn
+    outside the region read back."""
+    plots.animation(run, tmp_path / "region.gif")
+    width, height = (round(inches * plots.GIF_DPI) for inches in plots.GIF_SIZE)
+    monkeypatch.setattr(plots, "_region", lambda ax, texts: (0, 0, width, height))
+    plots.animation(run, tmp_path / "whole.gif")
+    region, whole = _gif_frames(tmp_path / "region.gif"), _gif_frames(tmp_path / "whole.gif")
+    assert len(region) == len(whole) > 10
+    for ours, theirs in zip(region, whole, strict=True):
+        np.testing.assert_array_equal(ours, theirs)
+
+
 def test_empty_and_short_records_say_no_data(empty, tmp_path):
     assert empty.data == {}
     short = _write(
