@@ -661,11 +661,8 @@ def _region(ax: Axes, texts: list[Box]) -> Box:
 def _rgb(canvas: FigureCanvasAgg, region: Box | None = None) -> Image.Image:
     """The canvas as it is now, or its ``region``, an RGB image (the clock is written on it by PIL: a
     text drawn by Matplotlib costs more than the rest of a frame)."""
-    pixels = np.asarray(canvas.buffer_rgba())
-    if region is not None:
-        left, top, right, bottom = region
-        pixels = pixels[top:bottom, left:right]
-    return Image.fromarray(np.ascontiguousarray(pixels[..., :3]))
+    image = Image.frombuffer("RGBA", canvas.get_width_height(), canvas.buffer_rgba(), "raw", "RGBA", 0, 1)
+    return (image if region is None else image.crop(region)).convert("RGB")
 
 
 def _save_gif(path: Path, still: Image.Image, region: Box, parts: list[Image.Image], frame_s: float) -> None:
