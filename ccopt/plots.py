@@ -760,7 +760,7 @@ def write_figures(run: Run, folder: str | Path, dpi: int = 100) -> list[Path]:
 
     The GIF and the maps are drawn in a forked worker process while this one draws the stills
     (:func:`side_by_side`): each half takes about as long as the other, and drawn one after the
-    other they took 1.6–1.8 times the loop of the ``paper`` run they showed (``docs/speed.md``).
+    other they took 1.5–1.8 times the loop of the ``paper`` run they showed (``docs/speed.md``).
     """
     record = as_record(run)
     return side_by_side(lambda: write_stills(record, folder, dpi), lambda: write_moving(record, folder))
