@@ -254,12 +254,12 @@ def draw(fmap: FeasibilityMap, path: str | Path | None = None, title: str = "", 
 FIGURE_NAME = "feasibility_map.png"
 
 
-def write_figure(folder: str | Path, dpi: int = 120) -> Path | None:
-    """Draw the maps a run folder keeps into ``feasibility_map.png``; its path, None if the folder
-    keeps no maps."""
+def write_figure(folder: str | Path, into: str | Path | None = None, dpi: int = 120) -> Path | None:
+    """Draw the maps a run folder keeps into ``feasibility_map.png`` of ``into`` (default: the run
+    folder); its path, None if the folder keeps no maps."""
     fmap = load(folder)
     if fmap is None:
         return None
-    path = Path(folder) / FIGURE_NAME
+    path = Path(folder if into is None else into) / FIGURE_NAME
     draw(fmap, path, dpi=dpi)
     return path

@@ -16,7 +16,12 @@ coordinate ``motion − 1``.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+import multiprocessing
+import pickle
+import signal
+import sys
+from collections.abc import Callable, Sequence
+from multiprocessing.connection import Connection
 from pathlib import Path
 
 import numpy as np
@@ -97,6 +102,13 @@ def _label_coordinates(axes: Sequence[Axes], what: str) -> None:
     axes[-1].set_xlabel("time (s)")
 
 
+def _legend_inside(ax: Axes) -> None:
+    """A small legend at the best place inside ``ax``. Kept out of the figure's layout, which has
+    nothing to make room for inside the axes: the best place is then searched for once, when drawn,
+    not in every pass of the layout as well (a twentieth of the still figures' time)."""
+    ax.legend(loc="best", fontsize="small").set_in_layout(False)
+
+
 def _name(record: Record) -> str:
     """The object and schedule of a run, for a title ("" if the run did not record them)."""
     obj, schedule = record.meta.get("object"), record.meta.get("schedule")
@@ -132,7 +144,7 @@ def _draw_traces(axes: Sequence[Axes], record: Record) -> None:
         ax.plot(time, estimate, color=ESTIMATE_COLOR, lw=1.0, label="estimated")
         if not valid.any():
             _no_data(ax, "no valid estimate")
-    axes[0].legend(loc="best", fontsize="small")
+    _legend_inside(axes[0])
 
 
 def estimation_traces(run: Run) -> Figure:
@@ -249,7 +261,7 @@ def _draw_hand_cone(ax: Axes, record: Record, index: int | None) -> None:
             label = "_"
     if len(points) == 0:
         _no_data(ax)
-    ax.legend(loc="best", fontsize="small")
+    _legend_inside(ax)
 
 
 def _world_forces(record: Record) -> np.ndarray:
@@ -321,7 +333,7 @@ def _draw_ground_cone(ax: Axes, record: Record, index: int | None) -> None:
             for k, segment in enumerate(_boundary(*cone, limits)):
                 _cone_line(ax, segment, color, style, label if k == 0 else "_", gid)
     ax.set(xlim=limits[0], ylim=limits[1])
-    ax.legend(loc="best", fontsize="small")
+    _legend_inside(ax)
 
 
 def _corner(rows: np.ndarray, bounds: np.ndarray, points: np.ndarray) -> list[np.ndarray]:
@@ -656,11 +668,8 @@ def _region(ax: Axes, texts: list[Box]) -> Box:
 def _rgb(canvas: FigureCanvasAgg, region: Box | None = None) -> Image.Image:
     """The canvas as it is now, or its ``region``, an RGB image (the clock is written on it by PIL: a
     text drawn by Matplotlib costs more than the rest of a frame)."""
-    pixels = np.asarray(canvas.buffer_rgba())
-    if region is not None:
-        left, top, right, bottom = region
-        pixels = pixels[top:bottom, left:right]
-    return Image.fromarray(np.ascontiguousarray(pixels[..., :3]))
+    image = Image.frombuffer("RGBA", canvas.get_width_height(), canvas.buffer_rgba(), "raw", "RGBA", 0, 1)
+    return (image if region is None else image.crop(region)).convert("RGB")
 
 
 def _save_gif(path: Path, still: Image.Image, region: Box, parts: list[Image.Image], frame_s: float) -> None:
@@ -718,9 +727,8 @@ PNG_OPTIONS = {"compress_level": 1}
 half of the time of Pillow's default (6), the files 5–25 % larger; the pixels are the same."""
 
 
-def write_figures(run: Run, folder: str | Path, dpi: int = 100) -> list[Path]:
-    """Write ``estimation.png`` (Fig. 6), ``friction_cones.png`` (Fig. 7), ``control.png`` (Fig. 8) and
-    ``animation.gif`` into ``folder`` (created if needed) and return their paths."""
+def write_stills(run: Run, folder: str | Path, dpi: int = 100) -> list[Path]:
+    """Write the still figures of :data:`FIGURES` into ``folder`` (created if needed); their paths."""
     record = as_record(run)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -728,5 +736,107 @@ def write_figures(run: Run, folder: str | Path, dpi: int = 100) -> list[Path]:
     for name, draw in FIGURES.items():
         draw(record).savefig(folder / name, dpi=dpi, pil_kwargs=PNG_OPTIONS)
         paths.append(folder / name)
-    paths.append(animation(record, folder / "animation.gif"))
     return paths
+
+
+def write_moving(run: Run, folder: str | Path) -> list[Path]:
+    """Write ``animation.gif`` into ``folder`` (created if needed) and, if the run's own folder keeps
+    feasibility maps, ``feasibility_map.png`` (:func:`ccopt.feasibility_map.write_figure`); their
+    paths."""
+    from ccopt import feasibility_map
+
+    record = as_record(run)
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = [animation(record, folder / "animation.gif")]
+    maps = feasibility_map.write_figure(record.folder, folder) if record.folder is not None else None
+    return paths + ([maps] if maps is not None else [])
+
+
+def write_figures(run: Run, folder: str | Path, dpi: int = 100) -> list[Path]:
+    """Write every figure of a run into ``folder`` (created if needed) and return their paths:
+    ``estimation.png`` (Fig. 6), ``friction_cones.png`` (Fig. 7), ``control.png`` (Fig. 8),
+    ``animation.gif`` and, if the run's folder keeps feasibility maps, ``feasibility_map.png``.
+
+    The GIF and the maps are drawn in a forked worker process while this one draws the stills
+    (:func:`side_by_side`): each half takes about as long as the other, and drawn one after the
+    other they took 1.5–1.8 times the loop of the ``paper`` run they showed (``docs/speed.md``).
+    """
+    record = as_record(run)
+    return side_by_side(lambda: write_stills(record, folder, dpi), lambda: write_moving(record, folder))
+
+
+# --- a second process -----------------------------------------------------------------------------
+
+FORK = sys.platform.startswith("linux")
+"""Whether :func:`side_by_side` forks a worker: on Linux. Elsewhere a fork is missing (Windows) or
+unsafe once the system's libraries are loaded (macOS), and a spawned worker would import everything
+again (half a second), so the two jobs run one after the other."""
+
+
+def side_by_side(here: Callable[[], list[Path]], there: Callable[[], list[Path]]) -> list[Path]:
+    """``here() + there()``, with ``there`` run in a forked worker process while this one runs
+    ``here`` (one after the other without :data:`FORK`).
+
+    An exception either raises here, this process's own first. On any exception, ``KeyboardInterrupt``
+    included, the worker is stopped before it propagates, so that no file is written after it: the
+    caller may then remove what the two wrote. The worker ignores Ctrl-C (this process stops it) and
+    dies quietly when stopped: the stop signals wait, blocked, until it has set its handlers.
+    """
+    if not FORK:
+        return here() + there()
+    context = multiprocessing.get_context("fork")
+    receiving, sending = context.Pipe(duplex=False)
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, STOPS)  # until the worker has its handlers
+    worker = context.Process(target=_work, args=(there, sending, mask), daemon=True)
+    try:
+        worker.start()
+    except BaseException:
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        raise
+    try:
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        sending.close()
+        mine = here()
+        try:
+            done, theirs = receiving.recv()
+        except EOFError:
+            worker.join()
+            raise RuntimeError(f"the figure worker ended with exit code {worker.exitcode}") from None
+    finally:
+        if worker.is_alive():
+            worker.terminate()
+        worker.join()
+        receiving.close()
+    if not done:
+        raise theirs
+    return mine + theirs
+
+
+STOPS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+"""The signals that stop a command (:func:`ccopt.cliutil.stop_signals`), as the worker of
+:func:`side_by_side` takes them: Ctrl-C ignored, the others ending it at once."""
+
+
+def _work(job: Callable[[], list[Path]], sending: Connection, mask: set[signal.Signals]) -> None:
+    """The worker of :func:`side_by_side`: send ``(True, job())`` or, if it raised, ``(False, the
+    exception)`` (a ``RuntimeError`` with its type and message if it cannot be pickled). ``mask``:
+    the signal mask to restore once its handlers are set."""
+    for number in STOPS:
+        signal.signal(number, signal.SIG_IGN if number == signal.SIGINT else signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+    try:
+        message = (True, job())
+    except Exception as error:  # handed to the parent, which raises it
+        message = (False, _picklable(error))
+    sending.send(message)
+    sending.close()
+
+
+def _picklable(error: Exception) -> Exception:
+    """``error`` if it survives pickling, else a ``RuntimeError`` naming its type and message."""
+    try:
+        pickle.loads(pickle.dumps(error))
+    except Exception:  # any failure to pickle or to rebuild it
+        return RuntimeError(f"{type(error).__name__}: {error}")
+    return error

@@ -98,3 +98,25 @@ def test_a_study_names_itself_as_ccopt_study_in_its_errors_and_every_study_has_q
         result = ccopt("study", name, "--help")
         assert result.returncode == 0 and "--quick" in result.stdout, name
         assert result.stdout.startswith(f"usage: ccopt study {name}"), name
+
+
+def test_plot_a_figure_the_worker_cannot_finish_is_one_line_and_leaves_none(tmp_path, capsys, monkeypatch):
+    """The GIF is drawn in a second process (ccopt.plots.side_by_side): its failure, after writing
+    part of the file, is the same one line, and neither its part nor the still figures drawn
+    meanwhile are left."""
+    from ccopt import cli, plots
+
+    out = tmp_path / "run"
+    run = ["run", "--schedule", "smoke", "--no-figures", "--no-progress", "--max-sim-s", "0.3"]
+    assert cli.main([*run, "--out", str(out)]) == 3
+    capsys.readouterr()
+
+    def cut_short(record, path):
+        path.write_bytes(b"GIF89a")
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(plots, "animation", cut_short)
+    assert cli.main(["plot", str(out)]) == 1
+    line = f"ccopt plot: cannot draw the figures of {str(out)!r}: OSError: [Errno 28] No space left on device"
+    assert capsys.readouterr().err.splitlines() == [line]
+    assert not list(out.glob("*.png")) and not list(out.glob("*.gif"))

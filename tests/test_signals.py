@@ -93,8 +93,8 @@ def test_ctrl_c_while_starting_leaves_no_folder(tmp_path):
 def test_ctrl_c_while_drawing_leaves_no_figure_cut_short(tmp_path):
     out = tmp_path / "run"
     process = start(out, "--schedule", "smoke")
-    wait_for(lambda: (out / "control.png").is_file(), process)  # the last still figure: the GIF next
-    time.sleep(0.1)  # into the GIF's frames (about 0.6 s of drawing on an idle machine)
+    # the first still figure: two more to draw, and the GIF and the maps under way in a second process
+    wait_for(lambda: (out / "estimation.png").is_file(), process)
     process.send_signal(signal.SIGINT)
     code, _, err = finish(process)
     assert code == 130 and err == ["ccopt run: interrupted"]
