@@ -382,7 +382,7 @@ def draw_figures(loaded: record.Record, folder: Path, prog: str) -> bool:
 
     The figures are the last work of ``ccopt run`` and ``ccopt plot``: what the process holds now is
     frozen out of the garbage collector's reach (``gc.freeze``), so that neither the worker forked to
-    draw half the figures (:func:`ccopt.plots.side_by_side`) nor the interpreter's last collections
+    draw half the figures (:func:`ccopt.forked.side_by_side`) nor the interpreter's last collections
     at exit traverse it again (their copies of its pages, and 0.1–0.15 s at exit after a ``paper``
     run).
     """

@@ -101,7 +101,7 @@ def test_a_study_names_itself_as_ccopt_study_in_its_errors_and_every_study_has_q
 
 
 def test_plot_a_figure_the_worker_cannot_finish_is_one_line_and_leaves_none(tmp_path, capsys, monkeypatch):
-    """The GIF is drawn in a second process (ccopt.plots.side_by_side): its failure, after writing
+    """The GIF is drawn in a second process (ccopt.forked.side_by_side): its failure, after writing
     part of the file, is the same one line, and neither its part nor the still figures drawn
     meanwhile are left."""
     from ccopt import cli, plots
