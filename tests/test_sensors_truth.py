@@ -193,3 +193,27 @@ def test_truth_modes_follow_contact_velocities() -> None:
         0.0, obj, 0, pose, np.zeros(3), hand + np.array([0.0, 0.0, 0.02]), np.zeros(3), True, True
     )
     assert tilted.hand_geometry == -1
+
+
+def test_the_ground_contact_stays_the_vertex_the_object_pivoted_about_while_it_still_touches() -> None:
+    # A square lying on a face touches the ground at two vertices; a tenth of a millimetre decides
+    # which is lowest. The last contact is kept while within the hysteresis, and given up beyond it.
+    obj = make_object("paper-square")
+    hand = np.array([0.0, 0.2, 0.0])
+    tilt = 3e-4 / np.ptp(obj.vertices[:, 0])  # the bottom face's ends 0.3 mm apart in height
+    flat = compute_truth(0.0, obj, 0, [0.0, 0.05, 0.0], np.zeros(3), hand, np.zeros(3), True, True)
+    first, flipped = flat.ground_vertex, []
+    for sign in (1.0, -1.0):
+        pose = [0.0, 0.05, sign * tilt]
+        lowest = compute_truth(0.0, obj, 0, pose, np.zeros(3), hand, np.zeros(3), True, True)
+        kept = compute_truth(0.0, obj, 0, pose, np.zeros(3), hand, np.zeros(3), True, True, first)
+        assert kept.ground_vertex == first
+        vertices = geometry.transform_points(obj.vertices, pose)
+        np.testing.assert_allclose(kept.r_o, vertices[first])
+        flipped.append(lowest.ground_vertex != first)
+    assert any(flipped)  # the lowest alone would have changed vertex
+    lifted = [0.0, 0.05, 0.2]  # 11°: one of the two is a centimetre up
+    vertices = geometry.transform_points(obj.vertices, lifted)
+    for previous in range(len(vertices)):
+        truth = compute_truth(0.0, obj, 0, lifted, np.zeros(3), hand, np.zeros(3), True, True, previous)
+        assert truth.ground_vertex == int(np.argmin(vertices[:, 1]))

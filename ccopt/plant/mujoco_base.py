@@ -58,6 +58,7 @@ class MujocoPlant:
     ) -> None:
         self.obj, self.params, self.start, self.hand = plant_inputs(obj, params, start, hand)
         self._push_end: float | None = None
+        self._ground_vertex: int | None = None  # the ground contact of the last truth read
         self._build()
 
     def _build(self) -> None:
@@ -171,10 +172,11 @@ class MujocoPlant:
 
     def truth(self) -> Truth:
         """Ground truth of the contact configuration (see :mod:`ccopt.plant.truth`); ``θ_o`` is that
-        of the start configuration's hand face."""
+        of the start configuration's hand face; the ground contact is the last read's vertex while
+        it stays within :data:`~ccopt.plant.truth.GROUND_VERTEX_HYSTERESIS` of the lowest."""
         pose = self.hand_pose()
         hand_force = geometry.wrench_world_to_hand(float(pose[2]), self.hand_wrench_world())[0]
-        return compute_truth(
+        truth = compute_truth(
             time=self.time,
             obj=self.obj,
             hand_face=self.start.hand_face,
@@ -184,4 +186,7 @@ class MujocoPlant:
             hand_velocity=self.hand_velocity(),
             in_contact_hand=hand_force > CONTACT_FORCE_MIN,
             in_contact_ground=self.ground_wrench()[1] > CONTACT_FORCE_MIN,
+            previous_vertex=self._ground_vertex,
         )
+        self._ground_vertex = truth.ground_vertex
+        return truth

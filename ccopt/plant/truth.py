@@ -31,6 +31,14 @@ SLIDE_SPEED = 1e-3
 PIVOT_ANGLE = math.radians(0.5)
 """Hand pivoting threshold on ``|θ_o − θ_h|``, rad: smaller is reported as flush."""
 
+GROUND_VERTEX_HYSTERESIS = 1e-3
+"""m: the vertex that was the ground contact stays it while it is within this height of the lowest.
+An object lying on a face touches the ground at two vertices whose heights differ by the contacts'
+compliance (tenths of a millimetre): the lowest alone flips between them, and with it ``s_g`` by a
+face's length, while the vertex the object pivoted about, which the coordinates mean, still
+touches."""
+
+
 @dataclass(frozen=True)
 class Truth:
     """True contact configuration at one instant.
@@ -52,6 +60,7 @@ class Truth:
         hand_slip_rate: object-relative-to-hand sliding velocity along ``e_t`` at the hand, m/s
             (``ṡ_h`` while flush).
         ground_slip_rate: ``ṡ_g``, m/s.
+        ground_vertex: index of the object's vertex that is the ground contact.
     """
 
     time: float
@@ -68,6 +77,7 @@ class Truth:
     in_contact_ground: bool
     hand_slip_rate: float
     ground_slip_rate: float
+    ground_vertex: int = 0
 
 
 def _mode(rate: float, threshold: float) -> int:
@@ -92,13 +102,21 @@ def compute_truth(
     hand_velocity: ArrayLike,
     in_contact_hand: bool,
     in_contact_ground: bool,
+    previous_vertex: int | None = None,
 ) -> Truth:
     """Truth from the object pose/velocity (centroid, world ``(x, y, φ)``) and the hand pose/velocity
-    (contact-face centre, world ``(x, y, θ)``); units m, rad, m/s, rad/s."""
+    (contact-face centre, world ``(x, y, θ)``); units m, rad, m/s, rad/s. The ground contact is the
+    lowest vertex, or ``previous_vertex`` (the last one) while within :data:`GROUND_VERTEX_HYSTERESIS`
+    of it."""
     object_pose = np.asarray(object_pose, dtype=float)
     hand_pose = np.asarray(hand_pose, dtype=float)
     world_vertices = geometry.transform_points(obj.vertices, object_pose)
-    r_o = world_vertices[geometry.lowest_vertex(world_vertices)]
+    vertex = geometry.lowest_vertex(world_vertices)
+    if previous_vertex is not None and (
+        world_vertices[previous_vertex, 1] <= world_vertices[vertex, 1] + GROUND_VERTEX_HYSTERESIS
+    ):
+        vertex = previous_vertex
+    r_o = world_vertices[vertex]
     s_h, d = geometry.contact_coordinates(hand_pose, r_o)
     theta_h = float(hand_pose[2])
     raw = geometry.face_angle(obj.face_normal(hand_face), float(object_pose[2]))
@@ -123,4 +141,5 @@ def compute_truth(
         in_contact_ground=bool(in_contact_ground),
         hand_slip_rate=hand_slip_rate,
         ground_slip_rate=ground_slip_rate,
+        ground_vertex=vertex,
     )
