@@ -18,6 +18,8 @@ COMPLIANCE = 0.04  # rad/(N·m): θ_h − θ_o = c τ
 STICK = ContactConfiguration()
 HAND_SLIDES = ContactConfiguration(hand_mode=ContactMode.SLIDE_POS)
 GROUND_SLIDES = ContactConfiguration(ground_mode=ContactMode.SLIDE_POS)
+INDETERMINATE = ContactConfiguration(hand_geometry=HandGeometry.PIVOT_POS, ground_mode=ContactMode.SLIDE_POS)
+"""The ground slides while the hand pivots: nothing in eqs. 14-16 holds."""
 
 
 def measured(pose: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -225,8 +227,7 @@ def test_resets_and_moves_of_the_ground_contact_are_counted():
     pose = measured(geometry.hand_pose_from_contact(0.1, S_H, D, R_O), rng)
     sliding = step(estimator, pose, GROUND_SLIDES)
     assert not sliding.ground_fixed and sliding.anchor > anchor and sliding.resets == 0
-    both_slide = ContactConfiguration(hand_mode=ContactMode.SLIDE_NEG, ground_mode=ContactMode.SLIDE_POS)
-    reset = step(estimator, pose, both_slide)
+    reset = step(estimator, pose, INDETERMINATE)
     assert reset.resets == 1 and reset.anchor > sliding.anchor
     assert reset.compliance == sliding.compliance  # a property of the contact: kept
 
@@ -237,10 +238,30 @@ def test_indeterminate_motion_resets_and_lost_contact_keeps_the_ground_contact()
     pose = measured(geometry.hand_pose_from_contact(0.0, S_H, D, R_O), rng)
     away = step(estimator, pose, in_contact=False)
     assert away.contact_valid and not away.s_h_valid
-    both_slide = ContactConfiguration(hand_mode=ContactMode.SLIDE_NEG, ground_mode=ContactMode.SLIDE_POS)
-    reset = step(estimator, pose, both_slide)
-    assert not reset.contact_valid and not reset.s_h_valid and reset.theta_o_valid
+    reset = step(estimator, pose, INDETERMINATE)
+    assert not reset.contact_valid and not reset.s_h_valid and not reset.theta_o_valid
     assert max(reset.std) == pytest.approx(estimator.params.prior_std)
+
+
+@pytest.mark.parametrize("theta_deg", [3.0, 10.0, 25.0])
+def test_both_contacts_sliding_release_only_x_o_and_s_h_as_well_as_the_pose_tells_them(theta_deg):
+    # Both contacts may slide: the object keeps d and y_o; the moved x_o and s_h come from the sample's
+    # eqs. 15-16 alone. With d and y_o known, eq. 15 gives x_o through I·e_n = sin θ (up to sign): its
+    # standard deviation is the position noise over |sin θ|, so it is valid only at a tilt.
+    estimator, rng = KinematicEstimator(L_H), np.random.default_rng(11)
+    before = pivot_about_ground(estimator, rng)
+    theta, moved_s_h, moved_r_o = math.radians(theta_deg), S_H + 0.004, R_O + np.array([-0.006, 0.0])
+    both_slide = ContactConfiguration(hand_mode=ContactMode.SLIDE_POS, ground_mode=ContactMode.SLIDE_NEG)
+    pose = measured(geometry.hand_pose_from_contact(theta, moved_s_h, D, moved_r_o), rng)
+    after = step(estimator, pose, both_slide)
+    assert after.resets == 0 and after.anchor > before.anchor
+    assert after.rough[0] == pytest.approx(before.d, abs=1e-4) and after.std[0] <= 1.01 * before.std[0]
+    noise = estimator.params.position_noise
+    assert after.std[1] == pytest.approx(noise / math.sin(theta), rel=0.2)
+    assert after.contact_valid == (noise / math.sin(theta) <= estimator.params.valid_std)
+    if after.contact_valid:
+        assert abs(after.s_g - moved_r_o[0]) <= 4.0 * after.std[1]
+        assert abs(after.s_h - moved_s_h) <= 4.0 * after.std[3]
 
 
 @pytest.mark.parametrize(

@@ -48,6 +48,10 @@ ground sticks, hand flush          eq. 15 (and eq. 16 if the hand sticks, so ``s
                                    eq. 16 re-estimates it every sample
 ground slides, hand sticks, flush  ``x_o`` released and both rows used every sample: ``r_o`` moves
                                    rigidly with the hand (the object keeps its height)
+ground slides, hand slides, flush  ``x_o`` and ``s_h`` released and both rows used every sample:
+                                   either contact may be the one moving (the forces could not
+                                   tell), and the pose tells them apart only by ``sin θ_o`` of the
+                                   motion, so their standard deviations say how well
 ground *may* slide (reported, but  as if it sticks, until an innovation exceeds ``slip_gate``
 not acted on), hand flush          standard deviations (eq. 15, and eq. 16 if the hand sticks); then,
                                    until the ground is reported sticking again, rigidly (hand
@@ -319,8 +323,8 @@ class KinematicEstimator:
             self._flush_angle(pose[2], torque)
         elif ground_sticks:
             pivot_ok = self._pivot(hand_pose, int(modes.hand_geometry))
-        elif flush and hand_sticks:
-            self._follow_ground(pose, frame, hand_sticks=True)
+        elif flush:
+            self._follow_ground(pose, frame, hand_sticks)
             self._flush_angle(pose[2], torque)
         else:
             self.reset()
