@@ -125,10 +125,11 @@ class LoopParams:
         return max(1, round(self.estimator_hz / self.record_hz))
 
 
-STEP_STATUSES = ("reached", "timeout", "infeasible", "rolled")
+STEP_STATUSES = ("reached", "timeout", "infeasible", "rolled", "lost")
 """How a step can end: its coordinate settled within tolerance (by the estimate), its time ran out,
-the estimated statics ruled it out, or (a goal's pivot) the hand rolled on the face instead: the
-object stopped pivoting (:data:`ROLL_TIME`)."""
+the estimated statics ruled it out, (a goal's pivot) the hand rolled on the face instead: the
+object stopped pivoting (:data:`ROLL_TIME`), or (a goal's motion) the kinematics became unknown
+(:data:`LOST_TIME`)."""
 
 
 @dataclass(frozen=True)
@@ -314,6 +315,7 @@ class _StepTracker:
         """The run's start ground contact (goals' ``s_g`` origin): the latest usable estimate before
         the first ground slide, when the regression has had the most data."""
         self._ground_moved = False
+        self._origin_anchor: int | None = None
         self.results: list[StepResult] = []
         self.use_estimate = False
         self.command: Command | None = None
@@ -321,6 +323,7 @@ class _StepTracker:
         self._nominal: np.ndarray | None = None
         self._within_since: float | None = None
         self._rolled_since: float | None = None
+        self._lost_since: float | None = None
         self.fresh = False
         """Whether the current step has not been controlled yet (the estimated statics judge it then)."""
 
@@ -344,9 +347,7 @@ class _StepTracker:
         self, now: float, estimate: Estimate, hand_pose: np.ndarray, status: str, reason: str = ""
     ) -> None:
         """End the motion under way with ``status`` and start the next one."""
-        latest = s_g_from(estimate)
-        if latest is not None and not self._ground_moved:  # the start's, as well as it is known now
-            self.s_g_origin = latest
+        self._update_origin(estimate)
         last = None
         if self.active is not None:
             step, goal = self.active, self.goal.index if self.goal is not None else None
@@ -376,7 +377,21 @@ class _StepTracker:
         self.start_time = now
         self._within_since = None
         self._rolled_since = None
+        self._lost_since = None
         self.fresh = True
+
+    def _update_origin(self, estimate: Estimate) -> None:
+        """The start's ground contact, as well as it is known now: the latest usable estimate while
+        the ground has neither been commanded to slide nor seen moving (its ``ground_anchor``
+        unchanged since the origin was first taken: an unintended slip the kinematics followed
+        would otherwise carry the origin along with the object)."""
+        latest = s_g_from(estimate)
+        if latest is None or self._ground_moved:
+            return
+        if self._origin_anchor is not None and estimate.ground_anchor != self._origin_anchor:
+            self._ground_moved = True
+            return
+        self.s_g_origin, self._origin_anchor = latest, estimate.ground_anchor
 
     def _next(self, now: float, estimate: Estimate, last: str | None) -> Step | None:
         """The next motion: the goal under way's, else the schedule's next step (a goal's first
@@ -424,6 +439,8 @@ class _StepTracker:
             self._within_since = now
         if (within and now - self._within_since >= self.settle_time - 1e-9) or self._overshot(coordinates):
             self.advance(now, estimate, hand_pose, "reached")
+        elif self.goal is not None and self._lost(now, coordinates):
+            self.advance(now, estimate, hand_pose, "lost", "the kinematics became unknown")
         elif elapsed >= self.step.timeout:
             self.advance(now, estimate, hand_pose, "timeout")
         elif self.goal is not None and elapsed >= SLIDE_START_TIME and not self._started(coordinates):
@@ -455,6 +472,17 @@ class _StepTracker:
         if self._rolled_since is None:
             self._rolled_since = now
         return now - self._rolled_since >= ROLL_TIME
+
+    def _lost(self, now: float, coordinates: np.ndarray | None) -> bool:
+        """Whether the estimate this step measures its progress on has been unusable for
+        :data:`LOST_TIME` (the estimator released what it could no longer tell, e.g. which contact
+        slid): the step cannot be judged, so a goal's motion ends and its planner explores again."""
+        if coordinates is not None or not self.use_estimate:
+            self._lost_since = None
+            return False
+        if self._lost_since is None:
+            self._lost_since = now
+        return now - self._lost_since >= LOST_TIME
 
     def _started(self, coordinates: np.ndarray | None) -> bool:
         """Whether a slide has moved its coordinate the commanded way by the slide onset (other
@@ -490,6 +518,8 @@ _ROLL_REASONS = {
     "slide_hand": "the hand rolled (or was about to) on the face's end instead of sliding",
     "slide_ground": "the hand rolled (or was about to) on the face's end instead of sliding the object",
 }
+LOST_TIME = 0.1
+"""s: a goal's motion whose progress estimate has been unusable this long ends ``lost``."""
 SLIDE_START_TIME = 3.0
 """A goal's planned slide that has not started after this long (s) ends: where the estimated statics
 were too hopeful (a ground row never slid past is estimated inside the true one), the planner

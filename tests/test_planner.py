@@ -19,13 +19,16 @@ import pytest
 
 from ccopt import statics
 from ccopt.closed_loop import LoopParams, start_config
+from ccopt.control.targets import TargetGoal
+from ccopt.estimation.estimator import Estimator
 from ccopt.modes import Motion, motion_of
 from ccopt.objects import make_object
 from ccopt.planning.graph import GraphParams
 from ccopt.planning.planner import PlannerParams, next_motion, oracle_plan
+from ccopt.planning.sequencer import GoalSequencer
 from ccopt.planning.tour import vertex_range
 from ccopt.plant.mujoco_planar import HAND_ANGLE_RANGE
-from ccopt.schedule import Goal, Step, reach
+from ccopt.schedule import Goal, Step, exploration, reach
 from tests.test_planning import Reference, bfs_distances
 
 FORCES = (2.0, 22.5)
@@ -237,3 +240,26 @@ def test_a_reach_closed_down_to_the_current_tilt_plans_without_pivots(cases: dic
     assert (ground.status == "move") == (margin >= 1.0)
     if ground.status == "move":
         assert ground.motion.kind == "slide_ground"
+
+
+def test_a_goal_explores_again_after_a_motion_lost_the_kinematics_and_fails_past_the_limit() -> None:
+    unknown = Estimator().update(0.0, [0.0, 0.1, 0.0], [5.0, 0.0, 0.0])  # one sample: nothing valid
+    aim = TargetGoal(force_limits=(2.0, 25.0), nominal_force=8.0, margin=1.0)
+    pivots = [step for step in exploration() if step.kind == "pivot"]
+
+    sequencer = GoalSequencer(0, reach(10.0), 0.0, HAND_ANGLE_RANGE, aim)
+    steps, answer = [], sequencer.next(0.0, unknown, None)
+    while isinstance(answer, Step):
+        steps.append(answer)
+        answer = sequencer.next(1.0, unknown, None, "reached")
+    assert steps == list(exploration()) and answer.status == "failed"  # unknown after exploring
+
+    sequencer = GoalSequencer(0, reach(10.0), 0.0, HAND_ANGLE_RANGE, aim)
+    sequencer.next(0.0, unknown, None)
+    for _ in exploration()[1:]:
+        sequencer.next(1.0, unknown, None, "reached")
+    again = sequencer.next(1.0, unknown, None, "lost")
+    assert again == pivots[0]  # the pivots only: the friction was explored
+    for step in pivots[1:]:
+        assert sequencer.next(1.0, unknown, None, "reached") == step
+    assert sequencer.next(1.0, unknown, None, "lost").status == "failed"  # max_explorations = 2

@@ -4,7 +4,10 @@ A closed loop that meets a :class:`~ccopt.schedule.Goal` hands it to a :class:`G
 answers, every time a motion ends, with the next motion or with how the goal ended:
 
 * **explore** — while the kinematics are not yet usable the statics cannot be judged: the
-  exploration of :func:`ccopt.schedule.exploration` runs first (once per goal);
+  exploration of :func:`ccopt.schedule.exploration` runs first; and after a motion that ended
+  ``lost`` (the estimator let go of what it could no longer tell, e.g. which contact slid) its
+  pivots run again, which find the ground contact and ``s_h`` anew (at most
+  :attr:`GoalSequencer.max_explorations` explorations per goal);
 * **move** — :func:`ccopt.planning.planner.next_motion` on the statics the estimate knows *now*
   (:func:`ccopt.control.targets.estimated_statics`, per motion), from the estimated configuration;
   where that finds no sequence and the hand has not yet slid, again with the hand friction one
@@ -96,6 +99,7 @@ class GoalSequencer:
     """
 
     max_misses = 3
+    max_explorations = 2
 
     def __init__(
         self,
@@ -122,6 +126,7 @@ class GoalSequencer:
         self.failed_slides: dict[int, float] = {}
         """Per way (``±1``), the tilt (rad) of the last ground slide that did not start."""
         self._exploration: list[Step] | None = None
+        self.explorations = 0
         self._last: tuple[Step, float] | None = None  # the last motion and the tilt it began at
 
     def next(
@@ -141,8 +146,13 @@ class GoalSequencer:
         if self.misses >= self.max_misses:
             return self.end(now, "failed", f"{self.misses} planned motions in a row were not reached")
         usable = _usable(estimate) and s_g_origin is not None
-        if self._exploration is None and not usable:
-            self._exploration = list(exploration())
+        if not usable and not self._exploration and self.explorations < self.max_explorations:
+            if self._exploration is None:
+                self._exploration = list(exploration())
+                self.explorations += 1
+            elif last_status == "lost":
+                self._exploration = [step for step in exploration() if step.kind == "pivot"]
+                self.explorations += 1
         if self._exploration:
             return self._take(self._exploration.pop(0))
         if not usable:
