@@ -125,11 +125,11 @@ class LoopParams:
         return max(1, round(self.estimator_hz / self.record_hz))
 
 
-STEP_STATUSES = ("reached", "timeout", "infeasible", "rolled", "lost")
+STEP_STATUSES = ("reached", "timeout", "infeasible", "rolled", "slipped", "lost")
 """How a step can end: its coordinate settled within tolerance (by the estimate), its time ran out,
 the estimated statics ruled it out, (a goal's pivot) the hand rolled on the face instead: the
-object stopped pivoting (:data:`ROLL_TIME`), or (a goal's motion) the kinematics became unknown
-(:data:`LOST_TIME`)."""
+object stopped pivoting (:data:`ROLL_TIME`), (a hand slide) the ground slid instead, or (a
+goal's motion) the kinematics became unknown (:data:`LOST_TIME`)."""
 
 
 @dataclass(frozen=True)
@@ -322,8 +322,7 @@ class _StepTracker:
         self.start_time = 0.0
         self._nominal: np.ndarray | None = None
         self._within_since: float | None = None
-        self._rolled_since: float | None = None
-        self._lost_since: float | None = None
+        self._since: dict[str, float] = {}  # when each lasting condition (rolled, lost, slipped) began
         self.fresh = False
         """Whether the current step has not been controlled yet (the estimated statics judge it then)."""
 
@@ -376,8 +375,7 @@ class _StepTracker:
         self.command = Command(self.step.motion, targets, start=current, wrench=np.array(estimate.wrench))
         self.start_time = now
         self._within_since = None
-        self._rolled_since = None
-        self._lost_since = None
+        self._since.clear()
         self.fresh = True
 
     def _update_origin(self, estimate: Estimate) -> None:
@@ -441,6 +439,8 @@ class _StepTracker:
             self.advance(now, estimate, hand_pose, "reached")
         elif self.goal is not None and self._lost(now, coordinates):
             self.advance(now, estimate, hand_pose, "lost", "the kinematics became unknown")
+        elif self._ground_slid(now, coordinates):
+            self.advance(now, estimate, hand_pose, "slipped", "the ground slid instead of the hand")
         elif elapsed >= self.step.timeout:
             self.advance(now, estimate, hand_pose, "timeout")
         elif self.goal is not None and elapsed >= SLIDE_START_TIME and not self._started(coordinates):
@@ -451,7 +451,7 @@ class _StepTracker:
     @property
     def rolling(self) -> bool:
         """Whether the hand is seen off flush in a goal's motion, not yet for :data:`ROLL_TIME`."""
-        return self._rolled_since is not None
+        return "rolled" in self._since
 
     def _rolled(self, now: float, estimate: Estimate) -> bool:
         """Whether the hand has been seen off flush for :data:`ROLL_TIME` (the estimate's hand
@@ -466,23 +466,37 @@ class _StepTracker:
         rolled = estimate.hand_geometry != HandGeometry.FLUSH
         if self.step.kind == "pivot":
             rolled = estimate.hand_geometry == -math.copysign(1.0, self.step.delta)
-        if not rolled:
-            self._rolled_since = None
+        return self._lasted("rolled", rolled, now, ROLL_TIME)
+
+    def _lasted(self, name: str, condition: bool, now: float, duration: float) -> bool:
+        """Whether ``condition`` has held since ``duration`` ago (s), without a break."""
+        if not condition:
+            self._since.pop(name, None)
             return False
-        if self._rolled_since is None:
-            self._rolled_since = now
-        return now - self._rolled_since >= ROLL_TIME
+        return now - self._since.setdefault(name, now) >= duration - 1e-9
+
+    def _ground_slid(self, now: float, coordinates: np.ndarray | None) -> bool:
+        """Whether, in a hand slide measured on the estimate, ``ŝ_g`` has been further than the
+        step's tolerance from where it began for :data:`LOST_TIME` (single samples jump by about a
+        millimetre where the kinematics re-anchor the ground on a false alarm): the estimator
+        followed a slip of the ground, and pushing on only drives it further (a hand-slide probe
+        whose ground gave, its motion taken as the ground's, pushed a random quadrilateral 58 mm
+        along the ground before the probe's own coordinate could be reached). The reverse, the hand
+        giving in a ground slide, the pose cannot tell at small tilts; the estimator lets go of the
+        kinematics there (a goal's motion then ends ``lost``)."""
+        moved = (
+            coordinates is not None
+            and self.use_estimate
+            and self.step.kind == "slide_hand"
+            and abs(coordinates[2] - self.command.start[2]) > self.step.tolerance
+        )
+        return self._lasted("slipped", moved, now, LOST_TIME)
 
     def _lost(self, now: float, coordinates: np.ndarray | None) -> bool:
         """Whether the estimate this step measures its progress on has been unusable for
         :data:`LOST_TIME` (the estimator released what it could no longer tell, e.g. which contact
         slid): the step cannot be judged, so a goal's motion ends and its planner explores again."""
-        if coordinates is not None or not self.use_estimate:
-            self._lost_since = None
-            return False
-        if self._lost_since is None:
-            self._lost_since = now
-        return now - self._lost_since >= LOST_TIME
+        return self._lasted("lost", coordinates is None and self.use_estimate, now, LOST_TIME)
 
     def _started(self, coordinates: np.ndarray | None) -> bool:
         """Whether a slide has moved its coordinate the commanded way by the slide onset (other

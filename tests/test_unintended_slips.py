@@ -4,7 +4,8 @@ simulator's truth.
 The object is a goals-study quadrilateral (0.57 kg, μ_h 0.45, μ_g 0.37) on which the exploration's
 hand-slide probe back (−3 mm at 17°) slides the *ground* instead: the forces keep the hand well inside
 its measured friction cone while the ground contact gives. Read as the hand's slide (the command),
-that left ŝ_h and ŝ_g 4–5 mm off for the rest of the run, and goals were reported reached on them.
+that left ŝ_h and ŝ_g 4–5 mm off for the rest of the run, and goals were reported reached on them;
+followed as the ground's, the slip must not move the goals' ``s_g`` origin along with the object.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ import pytest
 from ccopt.closed_loop import LoopParams
 from ccopt.experiment import run_experiment
 from ccopt.objects import from_vertices
-from ccopt.schedule import Schedule, exploration
+from ccopt.schedule import Schedule, exploration, reach
 
 VERTICES = [
     [-0.006005421805984263, 0.0342507347788834],
@@ -26,18 +27,32 @@ VERTICES = [
 SEED = 3521360814
 
 
+GOAL = reach(s_g_mm=-10.0)
+PROBE_BACK = len(exploration()) - 1
+
+
 @pytest.fixture(scope="module")
-def data() -> dict[str, np.ndarray]:
+def done():
     obj = from_vertices(np.array(VERTICES), 0.5679544847191581, 0.44639667695066065, 0.3666416532076299)
-    done = run_experiment(obj, Schedule("exploration", exploration()), LoopParams(), seed=SEED)
-    return done.result.samples
+    return run_experiment(obj, Schedule("slip", (*exploration(), GOAL)), LoopParams(), seed=SEED)
 
 
-def test_a_ground_slip_in_a_hand_slide_is_followed_as_the_grounds(data: dict[str, np.ndarray]) -> None:
+def test_a_ground_slip_in_a_hand_slide_is_followed_as_the_grounds(done) -> None:
+    data = done.result.samples
     truth, estimate = data["true_coordinates"], data["est_coordinates"]
-    probe_back = data["step_index"] == data["step_index"].max()
-    moved = truth[probe_back][-1] - truth[probe_back][0]
+    probe = np.flatnonzero(data["step_index"] == PROBE_BACK)
+    moved = truth[probe[-1]] - truth[probe[0]]
     assert abs(moved[2]) > 2e-3 and abs(moved[1]) < 1e-3  # the case: the ground slid, the hand did not
-    assert bool(data["est_kinematics_valid"][-1])
-    error = estimate[-1] - truth[-1]
+    end = probe[-1] + 1
+    assert done.result.steps[PROBE_BACK].status == "slipped"  # ended, not pushed on: the ground stops
+    later = np.searchsorted(data["time"], data["time"][end] + 0.3)
+    assert abs(truth[later, 2] - truth[end, 2]) < 0.5e-3 and abs(moved[2]) < 10e-3  # it ran 58 mm
+    assert bool(data["est_kinematics_valid"][end])
+    error = estimate[end] - truth[end]
     assert abs(error[1]) <= 1.5e-3 and abs(error[2]) <= 1.5e-3, error
+
+
+def test_the_goals_s_g_is_measured_from_where_the_ground_was_at_the_start(done) -> None:
+    (goal,) = done.summary["goals"]
+    assert goal["status"] == "reached"
+    assert abs(goal["true_error"]["s_g_mm"]) <= 1e3 * GOAL.length_tolerance

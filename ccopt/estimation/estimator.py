@@ -366,7 +366,7 @@ class Estimator:
         commanded: ContactConfiguration | None,
         kinematics: KinematicEstimate,
         theta_h: float,
-        either: bool = False,
+        either: bool,
     ) -> tuple[bool, bool]:
         """Update the slide evidence of both contacts; the ways the ground slid. Without a command
         the ground counts while the kinematics let it move; the hand does not count. While
@@ -375,9 +375,7 @@ class Estimator:
         ground = commanded.ground_mode if commanded is not None else None
         self.hand_slides.update(kinematics.s_h, _sliding_way(hand), theta_h, kinematics.rough[0])
         free = None if not kinematics.ground_fixed else 0
-        if either:
-            return self.ground_slides.update(kinematics.s_g, 0)
-        return self.ground_slides.update(kinematics.s_g, _sliding_way(ground, free))
+        return self.ground_slides.update(kinematics.s_g, 0 if either else _sliding_way(ground, free))
 
     def _skip(self, time: float) -> Estimate:
         if self._last is None:
@@ -536,7 +534,7 @@ def either_slides(
 
 @functools.cache  # 27 × 10 × 2 cases, as commanded_modes
 def _kinematic_reports(
-    likely: ContactConfiguration, commanded: ContactConfiguration | None, unobservable: bool = False
+    likely: ContactConfiguration, commanded: ContactConfiguration | None, unobservable: bool
 ) -> tuple[ContactConfiguration, bool, bool, bool]:
     """``(modes, ground_may_slide, hand_may_slide, both)`` for the kinematics: the most likely modes
     with every contact ``commanded`` keeps kept (:func:`commanded_modes`), :func:`_unacted_reports`,

@@ -147,11 +147,11 @@ class GoalSequencer:
             return self.end(now, "failed", f"{self.misses} planned motions in a row were not reached")
         usable = _usable(estimate) and s_g_origin is not None
         if not usable and not self._exploration and self.explorations < self.max_explorations:
-            if self._exploration is None:
-                self._exploration = list(exploration())
-                self.explorations += 1
-            elif last_status == "lost":
+            if last_status == "lost":
                 self._exploration = [step for step in exploration() if step.kind == "pivot"]
+                self.explorations += 1
+            elif self._exploration is None:
+                self._exploration = list(exploration())
                 self.explorations += 1
         if self._exploration:
             return self._take(self._exploration.pop(0))
