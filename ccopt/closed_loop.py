@@ -300,11 +300,14 @@ class _StepTracker:
         schedule: Schedule,
         settle_time: float,
         slide_onset: float,
+        report_hold: float,
         sequencer: Callable[[int, Goal, float], GoalSequencer] | None = None,
     ) -> None:
         self.steps = schedule.steps
         self.settle_time = settle_time
         self.slide_onset = slide_onset
+        self.report_hold = report_hold
+        """How long the estimate's classifier holds a pivoting report past its last tight sample (s)."""
         self.sequencer = sequencer
         self.index = -1
         self.active: Step | None = None
@@ -462,11 +465,17 @@ class _StepTracker:
         hand flush, so a hand on its edge is a slide becoming a roll, and the kinematics, which take
         the hand as flush, would read the roll as the slide. The classifier is conservative (a
         torque near the hand's limit reads as maybe rolling), so this ends a slide whose hand is
-        about to roll as well as one that rolled."""
-        rolled = estimate.hand_geometry != HandGeometry.FLUSH
+        about to roll as well as one that rolled. A pivot ends only once its torque has stayed at
+        the limit for :data:`ROLL_TIME`, i.e. the report for that long past the classifier's hold
+        (``report_hold``), which stretches every tight sample by as much: a pivot begun with the
+        torque the previous motion left at the hand's limit touches it for a few samples and turns
+        the object all the same (a random triangle's pivot at −26° did, for 0.04 s, and ended
+        `rolled` with the true hand flush, which cut the planner's reach short of the tilt its
+        ground slide needed)."""
         if self.step.kind == "pivot":
             rolled = estimate.hand_geometry == -math.copysign(1.0, self.step.delta)
-        return self._lasted("rolled", rolled, now, ROLL_TIME)
+            return self._lasted("rolled", rolled, now, ROLL_TIME + self.report_hold)
+        return self._lasted("rolled", estimate.hand_geometry != HandGeometry.FLUSH, now, ROLL_TIME)
 
     def _lasted(self, name: str, condition: bool, now: float, duration: float) -> bool:
         """Whether ``condition`` has held since ``duration`` ago (s), without a break."""
@@ -642,7 +651,11 @@ class _Loop:
         self.on_tick = on_tick
         self.samples: dict[str, list[np.ndarray]] = {}
         self.tracker = _StepTracker(
-            schedule, params.settle_time, params.controller_params.slide_onset, self._sequencer
+            schedule,
+            params.settle_time,
+            params.controller_params.slide_onset,
+            params.estimator_params.modes.hold_time,
+            self._sequencer,
         )
         self.target = np.array(self.plant.target(), dtype=float)
         self.velocity = np.zeros(3)
