@@ -130,8 +130,9 @@ def next_motion(
     ``face`` the range of ``s_h`` (m) over which the hand lies on the face, where known (the
     experimenter's oracle; the estimator does not know where the face ends); ``failed_slides``
     the tilts ``θ_o`` (rad) at which a ground slide each way (``+1``, ``-1``) was tried and did not
-    start: a slide towards ``±s_g`` is then sought only at tilts beyond, further that way (tilting
-    the hand's normal towards the slide is what lets the hand push the object along).
+    start: a slide towards ``±s_g`` is then sought only at tilts at least half a pivot step beyond,
+    further that way (tilting the hand's normal towards the slide is what lets the hand push the
+    object along).
     """
     params = params or PlannerParams()
     errors = goal.errors(np.asarray(where, dtype=float), s_g_origin)
@@ -184,12 +185,15 @@ def _towards_ground(
     params: PlannerParams,
     failed: dict[int, float],
 ) -> Plan:
-    """Slide the ground contact ``error`` (m) closer, going first where the slide is possible."""
+    """Slide the ground contact ``error`` (m) closer, going first where the slide is possible; past
+    a failed slide that way, only at least half a pivot step further (a retry from where exploring
+    left the object, a degree on, failed as its first try did)."""
     sign = 1.0 if error > 0.0 else -1.0
     tried = failed.get(int(sign))
+    beyond = 0.5 * graph.params.pivot_step
 
     def slides(node: Node) -> Edge | None:
-        if tried is not None and (graph.configuration(node)[0] - tried) * sign <= 1e-9:
+        if tried is not None and (graph.configuration(node)[0] - tried) * sign < beyond:
             return None
         return next((e for e in graph.edges(node) if e.kind == "slide_ground" and e.delta * sign > 0.0), None)
 
