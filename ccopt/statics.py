@@ -37,6 +37,7 @@ solve; a cvxpy + Clarabel twin checks it in the tests.
 from __future__ import annotations
 
 import functools
+import itertools
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
@@ -126,7 +127,7 @@ class ObjectStatics:
         if rows.shape != (2, 2) or bounds.shape != (2,):
             raise ValueError(f"ground rows must be 2×2 with 2 bounds, got {rows.shape} and {bounds.shape}")
         values = (self.mu_h, self.d, self.gravity.cos_coefficient, self.gravity.sin_coefficient)
-        finite = np.all(np.isfinite(rows)) and np.all(np.isfinite(bounds)) and all(map(math.isfinite, values))
+        finite = all(map(math.isfinite, (*rows.ravel().tolist(), *bounds.tolist(), *values)))
         if not finite:
             raise ValueError("object statics must be finite")
         if self.mu_h < 0.0:
@@ -214,10 +215,19 @@ def build_statics_lp() -> ca.Function:
     )
 
 
+_INPUT_SIZES = (_N_PARAMETERS, N_CONE_ROWS, _N_UNKNOWNS, _N_ROWS, _N_ROWS, _N_UNKNOWNS, _N_UNKNOWNS)
+"""Sizes of the LP's inputs ``(p, keep, g, lba, uba, lbx, ubx)``, in order."""
+
+
 @functools.cache
 def _solver() -> BufferedFunction:
-    """The LP, built on first use (each thread evaluates it through its own buffers)."""
-    return BufferedFunction(build_statics_lp())
+    """The LP of :func:`build_statics_lp` on its inputs concatenated into one vector, giving ``x``
+    and the rows as one vector (a solve fills one buffer and reads one), built on first use (each
+    thread evaluates it through its own buffers)."""
+    lp = build_statics_lp()
+    packed = ca.MX.sym("packed", sum(_INPUT_SIZES))
+    inputs = ca.vertsplit(packed, list(itertools.accumulate(_INPUT_SIZES, initial=0)))
+    return BufferedFunction(ca.Function("statics_lp_packed", [packed], [ca.vertcat(*lp(*inputs))]))
 
 
 def _row_bounds(motion: Motion) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -277,27 +287,56 @@ def _solve(
     nominal_force: float = 0.0,
     beyond: float = 0.0,
 ) -> StaticsResult:
-    rows_of = _rows_of(motion, statics.ground_known)
-    if rows_of is None:
+    problem = _Problem.of(statics, configuration, motion, l_h, force_limits, beyond)
+    if problem is None:
         return StaticsResult(math.nan, None)
-    keep, lba, uba = rows_of
-    lba, uba = lba.copy(), uba.copy()
-    for row in modes.REMOVED_ROWS[motion]:
-        lba[row] = uba[row] = -beyond
-    lba[-2], lba[-1] = -nominal_force, nominal_force
-    f_min, f_max = force_limits
-    lbx = (f_min, -_BIG, -_BIG, least_margin, -_BIG)
-    ubx = (f_max, *_UPPER_X[1:])
-    theta_o, s_h = configuration
-    binding = _solver().buffers()  # filled in place: the LP is called twice a control tick
-    values = (parameters(statics, theta_o, s_h, l_h), keep, objective, lba, uba, lbx, ubx)
-    for flat, value in zip(binding.flat_inputs, values, strict=True):
-        flat[:] = value
-    binding.evaluate()
-    x, rows = _honest_margin(binding.flat_outputs[0].tolist(), binding.flat_outputs[1].tolist(), keep)
-    if not _satisfied(x, rows, lba, uba, lbx, ubx):
-        return StaticsResult(-math.inf, None)
-    return StaticsResult(x[3], np.array(x[:3]))
+    return problem.solve(objective, least_margin, nominal_force)
+
+
+class _Problem:
+    """The LPs of one motion at one configuration: what their inputs share, and their solve."""
+
+    def __init__(self, head: list[float], keep: list[float], lba: list[float], uba: list[float],
+                 force_limits: tuple[float, float]) -> None:
+        self.head, self.keep, self.lba, self.uba = head, keep, lba, uba  # head: p and keep
+        self.lower_force, self.upper_force = force_limits
+
+    @classmethod
+    def of(
+        cls,
+        statics: ObjectStatics,
+        configuration: tuple[float, float],
+        motion: Motion,
+        l_h: float,
+        force_limits: tuple[float, float],
+        beyond: float,
+    ) -> _Problem | None:
+        """The LPs of ``motion`` at ``configuration`` (see :func:`_solve`'s callers); None where a row
+        the motion removes is unknown."""
+        rows_of = _rows_of(motion, statics.ground_known)
+        if rows_of is None:
+            return None
+        keep, lba, uba = rows_of
+        lba, uba = lba[:-2], uba.copy()  # the |f_n − f_nom| rows' lower bounds are set per solve
+        for row in modes.REMOVED_ROWS[motion]:
+            lba[row] = uba[row] = -beyond
+        theta_o, s_h = configuration
+        return cls([*parameters(statics, theta_o, s_h, l_h), *keep], keep, lba, uba, force_limits)
+
+    def solve(self, objective: tuple[float, ...], least_margin: float, nominal_force: float) -> StaticsResult:
+        """The LP minimising ``objective`` with a margin of at least ``least_margin`` and the normal
+        force's distance from ``nominal_force``."""
+        lba = [*self.lba, -nominal_force, nominal_force]
+        lbx = (self.lower_force, -_BIG, -_BIG, least_margin, -_BIG)
+        ubx = (self.upper_force, *_UPPER_X[1:])
+        binding = _solver().buffers()  # filled in place: the LP is called twice a control tick
+        binding.flat_inputs[0][:] = [*self.head, *objective, *lba, *self.uba, *lbx, *ubx]
+        binding.evaluate()
+        solution = binding.flat_outputs[0].tolist()
+        x, rows = _honest_margin(solution[:_N_UNKNOWNS], solution[_N_UNKNOWNS:], self.keep)
+        if not _satisfied(x, rows, lba, self.uba, lbx, ubx):
+            return StaticsResult(-math.inf, None)
+        return StaticsResult(x[3], np.array(x[:3]))
 
 
 def _honest_margin(x: list[float], rows: list[float], keep: list[float]) -> tuple[list[float], list[float]]:
@@ -356,15 +395,14 @@ def regulation_wrench(
     (N), the contact a slide moves is put that far past its row rather than on it: for a row
     estimated inside the true one, the wrench that still slides it.
     """
-    motion = Motion(motion)
-    where = (theta_o, s_h)
-    best = _solve(statics, where, motion, l_h, force_limits, _MAXIMISE_MARGIN, beyond=beyond)
+    problem = _Problem.of(statics, (theta_o, s_h), Motion(motion), l_h, force_limits, beyond)
+    if problem is None:
+        return StaticsResult(math.nan, None)
+    best = problem.solve(_MAXIMISE_MARGIN, -_BIG, 0.0)
     if best.wrench is None:
         return best
     least = min(best.margin, margin_goal) - _FEASIBILITY_TOLERANCE
-    found = _solve(
-        statics, where, motion, l_h, force_limits, _NEAREST_FORCE, least, nominal_force, beyond
-    )
+    found = problem.solve(_NEAREST_FORCE, least, nominal_force)
     return StaticsResult(least, found.wrench) if found.wrench is not None else best
 
 
@@ -377,10 +415,10 @@ def _satisfied(*values: Sequence[float]) -> bool:
 def _within(values: Sequence[float], lower: Sequence[float], upper: Sequence[float]) -> bool:
     """Whether every value lies within its bounds up to :data:`_FEASIBILITY_TOLERANCE` (False for NaN)."""
     tolerance = _FEASIBILITY_TOLERANCE
-    return all(
-        low - tolerance <= value <= high + tolerance
-        for value, low, high in zip(values, lower, upper, strict=True)
-    )
+    for value, low, high in zip(values, lower, upper, strict=True):
+        if not low - tolerance <= value <= high + tolerance:
+            return False
+    return True
 
 
 # --- the experimenter's oracle: a known object as a run starts it ---------------------------------

@@ -27,7 +27,6 @@ commanded to (``Estimate.hand_slid``), ``μ̂_h`` was measured at the limit and 
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -91,7 +90,7 @@ def estimated_statics(
         if side is not None and not known[side]:  # the crossed row from the hull
             rows[side], bounds[side] = estimate.ground_rows[side], estimate.ground_bounds[side]
             known[side] = True
-    if not (np.all(np.isfinite(rows)) and np.all(np.isfinite(bounds))):
+    if not all(map(math.isfinite, (*rows.ravel().tolist(), *bounds.tolist()))):
         return None
     friction = estimate.mu_h if mu_h is None else mu_h
     return statics.ObjectStatics(friction, rows, bounds, estimate.d, gravity, tuple(known))
@@ -144,7 +143,7 @@ def statics_target(estimate: Estimate, hand_angle: float, motion: Motion, goal: 
     mu_h = estimate.mu_h + goal.friction_step
     bolder = _target(estimate, hand_angle, motion, goal, mu_h)
     if bolder.judged and bolder.margin > target.margin:
-        return dataclasses.replace(bolder, mu_h=mu_h)
+        return StaticsTarget(bolder.force, bolder.tangential, bolder.margin, mu_h)
     return target
 
 
