@@ -32,7 +32,7 @@ from ccopt.control.targets import UNJUDGED, StaticsTarget, TargetGoal, statics_t
 from ccopt.estimation.estimator import Estimate, Estimator, EstimatorParams
 from ccopt.hand import Hand
 from ccopt.health import HealthParams, SensorHealth
-from ccopt.modes import MOTION_CODES, HandGeometry
+from ccopt.modes import MOTION_CODES, ContactConfiguration, HandGeometry
 from ccopt.objects import PlanarObject
 from ccopt.planning.planner import PlannerParams
 from ccopt.planning.sequencer import GoalResult, GoalSequencer, s_g_from
@@ -200,29 +200,28 @@ def start_config(obj: PlanarObject, params: LoopParams) -> StartConfig:
     return params.start
 
 
-_FROM_ESTIMATE = ("wrench", "cone_rows", "cone_bounds", "row_valid", "mu_h", "s_h", "d")
-"""The fields a :class:`ControlInput` takes from the :class:`Estimate` as they are."""
-
-
 def control_input(
     estimate: Estimate, hand_pose: np.ndarray, coordinates: np.ndarray, target: StaticsTarget = UNJUDGED
 ) -> ControlInput:
     """What the controller reads from an estimate, the measured hand pose, the progress source and the
     estimated statics' target (with the hand friction it explores, if any: :mod:`ccopt.control.targets`)."""
-    values = {name: getattr(estimate, name) for name in _FROM_ESTIMATE}
+    cone_rows, mu_h = estimate.cone_rows, estimate.mu_h
     if target.mu_h is not None:
-        values["cone_rows"] = contact.with_hand_friction(estimate.cone_rows, target.mu_h)
-        values["mu_h"] = target.mu_h
-    values["row_valid"] = enforced_rows(estimate)
+        cone_rows, mu_h = contact.with_hand_friction(cone_rows, target.mu_h), target.mu_h
     usable = kinematics_usable(estimate)
-    if not usable:
-        values["s_h"], values["d"] = rough_lever(estimate)
+    s_h, d = (estimate.s_h, estimate.d) if usable else rough_lever(estimate)
     return validation.trusted(  # every field, each well formed by construction
         ControlInput,
         {
-            **values,
+            "wrench": estimate.wrench,
+            "cone_rows": cone_rows,
+            "cone_bounds": estimate.cone_bounds,
+            "row_valid": enforced_rows(estimate),
+            "mu_h": mu_h,
             "l_h": estimate.torque_lever,
             "hand_angle": float(hand_pose[2]),
+            "s_h": s_h,
+            "d": d,
             "kinematics_valid": usable,
             "coordinates": coordinates,
             "force_target": target.force,
@@ -259,23 +258,31 @@ def enforced_rows(estimate: Estimate) -> np.ndarray:
     the ground only those fitted to a friction face. A row at the extent of the data seen so far is
     no friction boundary: keeping it would hold the hand force where it has been and block every new
     tilt, while the mode classifier stays conservative about it all the same."""
-    enforced = np.array(estimate.row_valid, dtype=bool)
-    for row, fitted in zip(GROUND_ROWS, estimate.ground_fitted, strict=True):
-        if not fitted:
-            enforced[row] = False
-    return enforced
+    return np.logical_and(estimate.row_valid, _FITTED_ROWS[tuple(estimate.ground_fitted)])
+
+
+def _fitted_rows(fitted: tuple[bool, bool]) -> np.ndarray:
+    """The rows :func:`enforced_rows` may keep where the ground rows' ``fitted`` are as given."""
+    rows = np.ones(contact.N_CONE_ROWS, dtype=bool)
+    rows[list(GROUND_ROWS)] = fitted
+    return rows
+
+
+_FITTED_ROWS = {(a, b): _fitted_rows((a, b)) for a in (False, True) for b in (False, True)}
 
 
 def kinematics_usable(estimate: Estimate) -> bool:
     """Valid and finite: an estimate flagged valid with NaN coordinates is treated as unknown."""
-    values = (estimate.theta_o, estimate.s_h, estimate.s_g, estimate.d)
-    return bool(estimate.kinematics_valid) and all(map(math.isfinite, values))
+    if not estimate.kinematics_valid:
+        return False
+    return all(map(math.isfinite, (estimate.theta_o, estimate.s_h, estimate.s_g, estimate.d)))
 
 
 def hand_proxy(hand_pose: np.ndarray) -> np.ndarray:
     """Coordinates that change like ``(θ_o, s_h, s_g)`` while the commanded configuration holds."""
-    x_h, y_h, theta_h = hand_pose
-    return np.array([theta_h, -np.dot([x_h, y_h], geometry.hand_tangent(theta_h)), x_h])
+    x_h, y_h, theta_h = np.asarray(hand_pose, dtype=float).tolist()
+    along = np.dot((x_h, y_h), geometry.hand_tangent(theta_h))
+    return np.array((theta_h, -along, x_h))
 
 
 class _StepTracker:
@@ -322,6 +329,8 @@ class _StepTracker:
         self.results: list[StepResult] = []
         self.use_estimate = False
         self.command: Command | None = None
+        self.configuration: ContactConfiguration | None = None
+        """The contact configuration the command asks for (None before the first step)."""
         self.start_time = 0.0
         self._nominal: np.ndarray | None = None
         self._within_since: float | None = None
@@ -347,8 +356,9 @@ class _StepTracker:
 
     def advance(
         self, now: float, estimate: Estimate, hand_pose: np.ndarray, status: str, reason: str = ""
-    ) -> None:
-        """End the motion under way with ``status`` and start the next one."""
+    ) -> np.ndarray | None:
+        """End the motion under way with ``status`` and start the next one; its progress coordinates
+        (None at the end of the schedule)."""
         self._update_origin(estimate)
         last = None
         if self.active is not None:
@@ -358,7 +368,7 @@ class _StepTracker:
             last = status
         step = self._next(now, estimate, last)
         if step is None:
-            return
+            return None
         self.active = step
         self._ground_moved = self._ground_moved or step.kind == "slide_ground"
         use_estimate = kinematics_usable(estimate)
@@ -376,10 +386,12 @@ class _StepTracker:
             targets[k] += self.step.delta
         self._nominal = targets.copy()
         self.command = Command(self.step.motion, targets, start=current, wrench=np.array(estimate.wrench))
+        self.configuration = modes.configuration(self.step.motion)
         self.start_time = now
         self._within_since = None
         self._since.clear()
         self.fresh = True
+        return current
 
     def _update_origin(self, estimate: Estimate) -> None:
         """The start's ground contact, as well as it is known now: the latest usable estimate while
@@ -420,16 +432,16 @@ class _StepTracker:
             self.goal_results.append(answer)
             self.goal = None
 
-    def update(self, now: float, estimate: Estimate, hand_pose: np.ndarray) -> None:
-        """Move to the next step when this one is reached or timed out."""
+    def update(self, now: float, estimate: Estimate, hand_pose: np.ndarray) -> np.ndarray | None:
+        """Move to the next step when this one is reached or timed out; the progress coordinates of
+        the step then under way (:meth:`coordinates`)."""
         if self.index < 0:
-            self.advance(now, estimate, hand_pose, "reached")
-            return
+            return self.advance(now, estimate, hand_pose, "reached")
         elapsed = now - self.start_time
         if self.step.kind == "hold":
             if elapsed >= self.step.timeout:
-                self.advance(now, estimate, hand_pose, "reached")
-            return
+                return self.advance(now, estimate, hand_pose, "reached")
+            return self.coordinates(estimate, hand_pose)
         k = self.step.coordinate
         coordinates = self.coordinates(estimate, hand_pose)
         tolerance = self.step.tolerance
@@ -439,17 +451,19 @@ class _StepTracker:
         elif self._within_since is None:
             self._within_since = now
         if (within and now - self._within_since >= self.settle_time - 1e-9) or self._overshot(coordinates):
-            self.advance(now, estimate, hand_pose, "reached")
-        elif self.goal is not None and self._lost(now, coordinates):
-            self.advance(now, estimate, hand_pose, "lost", "the kinematics became unknown")
-        elif self._ground_slid(now, coordinates):
-            self.advance(now, estimate, hand_pose, "slipped", "the ground slid instead of the hand")
-        elif elapsed >= self.step.timeout:
-            self.advance(now, estimate, hand_pose, "timeout")
-        elif self.goal is not None and elapsed >= SLIDE_START_TIME and not self._started(coordinates):
-            self.advance(now, estimate, hand_pose, "timeout", f"did not start within {SLIDE_START_TIME:g} s")
-        elif self.goal is not None and self._rolled(now, estimate):
-            self.advance(now, estimate, hand_pose, "rolled", _ROLL_REASONS[self.step.kind])
+            return self.advance(now, estimate, hand_pose, "reached")
+        if self.goal is not None and self._lost(now, coordinates):
+            return self.advance(now, estimate, hand_pose, "lost", "the kinematics became unknown")
+        if self._ground_slid(now, coordinates):
+            return self.advance(now, estimate, hand_pose, "slipped", "the ground slid instead of the hand")
+        if elapsed >= self.step.timeout:
+            return self.advance(now, estimate, hand_pose, "timeout")
+        if self.goal is not None and elapsed >= SLIDE_START_TIME and not self._started(coordinates):
+            reason = f"did not start within {SLIDE_START_TIME:g} s"
+            return self.advance(now, estimate, hand_pose, "timeout", reason)
+        if self.goal is not None and self._rolled(now, estimate):
+            return self.advance(now, estimate, hand_pose, "rolled", _ROLL_REASONS[self.step.kind])
+        return coordinates
 
     @property
     def rolling(self) -> bool:
@@ -665,6 +679,7 @@ class _Loop:
         self.statics_period = params.ticks(params.statics_hz) * params.plant_params.timestep
         self.last_aim: tuple[float, StaticsTarget] | None = None  # (time, target)
         self.sensed = 0  # estimator samples so far
+        self.record_stride = params.record_stride
         self.estimate: Estimate | None = None
         self.last_usable: Estimate | None = None
         self.tilt_limits: dict[int, float] = {}
@@ -709,7 +724,7 @@ class _Loop:
 
     def _advance_plant(self) -> None:
         plant = self.plant
-        self.target = self.target + self.velocity * self.timestep
+        self.target += self.velocity * self.timestep
         plant.set_target(self.target, self.velocity)
         while self.pending and plant.time >= self.pending[0].time:
             push = self.pending.pop(0)
@@ -719,14 +734,13 @@ class _Loop:
     def _sense(self) -> None:
         reading = self.sensors.read()
         time, pose, wrench = reading.time, reading.hand_pose, reading.hand_wrench
-        commanded = modes.configuration(self.tracker.command.motion) if self.tracker.command else None
-        self.estimate = self.estimator.update(time, pose, wrench, commanded)
+        self.estimate = self.estimator.update(time, pose, wrench, self.tracker.configuration)
         if self.estimate.kinematics_valid:
             self.last_usable = self.estimate
         self.hand_pose = pose if all(map(math.isfinite, pose.tolist())) else None
         if self._lost():  # a dropout: the target holds still from this reading on, not from the next
             self.velocity[:] = 0.0  # control tick (up to a control period of ramping on the last step)
-        if self.sensed % self.params.record_stride == 0:
+        if self.sensed % self.record_stride == 0:
             self._record(reading)
         self.sensed += 1
         health = self.health.update(time, pose, wrench, self.target)
@@ -752,13 +766,12 @@ class _Loop:
         if self._contact_lost():
             return
         tracker, estimate, hand_pose = self.tracker, self.estimate, self.hand_pose
-        tracker.update(self.plant.time, estimate, hand_pose)
+        coordinates = tracker.update(self.plant.time, estimate, hand_pose)
         if tracker.done:
             return
         if tracker.rolling and modes.REMOVED_ROWS[tracker.step.motion]:
             self.velocity = np.zeros(3)  # a slide whose hand rolls: pushed on, the roll runs along the face
             return
-        coordinates = tracker.coordinates(estimate, hand_pose)
         if coordinates is None:  # the estimate is unusable: hold where the command says
             coordinates = tracker.command.targets
         aim = self._aim(estimate, hand_pose)

@@ -63,6 +63,8 @@ def hand_normal(theta_h: float | ca.SX | ca.MX) -> Array | ca.SX | ca.MX:
 
     Accepts a float (returns a NumPy vector) or a CasADi symbol (returns a CasADi column).
     """
+    if isinstance(theta_h, float):  # math's sine and cosine: NumPy's values, without its overhead
+        return np.array((math.sin(theta_h), -math.cos(theta_h)))
     if _is_symbolic(theta_h):
         return ca.vertcat(ca.sin(theta_h), -ca.cos(theta_h))
     return np.array([np.sin(theta_h), -np.cos(theta_h)])
@@ -70,6 +72,8 @@ def hand_normal(theta_h: float | ca.SX | ca.MX) -> Array | ca.SX | ca.MX:
 
 def hand_tangent(theta_h: float | ca.SX | ca.MX) -> Array | ca.SX | ca.MX:
     """``e_t``: ``e_n`` rotated by +90°, world frame (NumPy or CasADi, like :func:`hand_normal`)."""
+    if isinstance(theta_h, float):
+        return np.array((math.cos(theta_h), math.sin(theta_h)))
     if _is_symbolic(theta_h):
         return ca.vertcat(ca.cos(theta_h), ca.sin(theta_h))
     return np.array([np.cos(theta_h), np.sin(theta_h)])
@@ -103,7 +107,7 @@ def hand_frame(theta_h: float | ca.SX | ca.MX) -> Array | ca.SX | ca.MX:
 def planar_hand_to_world(theta_h: float) -> Array:
     """3×3 map of hand-frame ``(n, t, θ)`` vectors (forces/torque or displacements) to world ``(x, y, θ)``."""
     (nx, ny), (tx, ty) = hand_axes(theta_h)
-    return np.array(((nx, tx, 0.0), (ny, ty, 0.0), (0.0, 0.0, 1.0)))
+    return np.array((nx, tx, 0.0, ny, ty, 0.0, 0.0, 0.0, 1.0)).reshape(3, 3)
 
 
 def wrench_hand_to_world(theta_h: float, wrench_hand: ArrayLike) -> Array:

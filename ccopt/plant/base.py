@@ -23,7 +23,7 @@ from ccopt.plant.truth import Truth
 def planar_vector(name: str, value: ArrayLike) -> np.ndarray:
     """``value`` as 3 finite floats ``(x, y, θ)``; ``ValueError`` naming ``name`` otherwise."""
     vector = np.asarray(value, dtype=float)
-    if vector.shape != (3,) or not math.isfinite(vector.sum()):
+    if vector.shape != (3,) or not math.isfinite(sum(vector.tolist())):  # a NaN or an inf: not finite
         raise ValueError(f"{name} must be 3 finite numbers (x, y, θ), got {value!r}")
     return vector
 
