@@ -44,12 +44,14 @@ Array = NDArray[np.float64]
 
 def rotation(theta: float) -> Array:
     """2×2 rotation matrix of a CCW angle ``theta`` (rad)."""
-    c, s = np.cos(theta), np.sin(theta)
-    return np.array([[c, -s], [s, c]])
+    c, s = math.cos(theta), math.sin(theta)
+    return np.array(((c, -s), (s, c)))
 
 
 def wrap_angle(theta: ArrayLike) -> Array | float:
     """Angle(s) wrapped to ``[-π, π)``."""
+    if isinstance(theta, float):  # Python's float remainder is NumPy's: the same value, cheaper
+        return (theta + math.pi) % (2.0 * math.pi) - math.pi
     wrapped = (np.asarray(theta, dtype=float) + np.pi) % (2.0 * np.pi) - np.pi
     return float(wrapped) if np.ndim(wrapped) == 0 else wrapped
 
@@ -142,9 +144,9 @@ def twist_world_to_hand(theta_h: float, twist_world: ArrayLike) -> Array:
 
 def shift_torque(wrench_world: ArrayLike, from_point: ArrayLike, to_point: ArrayLike) -> Array:
     """Re-express a planar world wrench's torque about ``to_point`` instead of ``from_point`` (m)."""
-    fx, fy, tau = np.asarray(wrench_world, dtype=float)
-    rx, ry = np.asarray(from_point, dtype=float) - np.asarray(to_point, dtype=float)
-    return np.array([fx, fy, tau + rx * fy - ry * fx])
+    fx, fy, tau = np.asarray(wrench_world, dtype=float).tolist()
+    rx, ry = (np.asarray(from_point, dtype=float) - np.asarray(to_point, dtype=float)).tolist()
+    return np.array((fx, fy, tau + rx * fy - ry * fx))
 
 
 def hand_pose_from_contact(theta_o: float, s_h: float, d: float, r_o: ArrayLike) -> Array:
@@ -162,8 +164,9 @@ def hand_pose_from_contact(theta_o: float, s_h: float, d: float, r_o: ArrayLike)
 
 def contact_coordinates(hand_pose: ArrayLike, r_o: ArrayLike) -> tuple[float, float]:
     """``(s_h, d)`` of the ground contact ``r_o`` seen from the hand pose (paper eqs. 14, 16), m."""
-    x_h, y_h, theta_h = np.asarray(hand_pose, dtype=float)
-    rel = np.asarray(r_o, dtype=float) - np.array([x_h, y_h])
+    pose = np.asarray(hand_pose, dtype=float)
+    rel = np.asarray(r_o, dtype=float) - pose[:2]
+    theta_h = pose.item(2)
     return float(rel @ hand_tangent(theta_h)), float(rel @ hand_normal(theta_h))
 
 
@@ -272,5 +275,5 @@ def lowest_vertex(world_vertices: ArrayLike) -> int:
 
 def transform_points(points: ArrayLike, pose: ArrayLike) -> Array:
     """Points given in a body frame, mapped to the world by the body pose ``(x, y, θ)``."""
-    x, y, theta = np.asarray(pose, dtype=float)
-    return np.asarray(points, dtype=float) @ rotation(theta).T + np.array([x, y])
+    x, y, theta = np.asarray(pose, dtype=float).tolist()
+    return np.asarray(points, dtype=float) @ rotation(theta).T + np.array((x, y))

@@ -20,6 +20,7 @@ evaluated in process, with a warning.
 from __future__ import annotations
 
 import functools
+import math
 import subprocess
 import warnings
 from pathlib import Path
@@ -388,4 +389,4 @@ class Tick:
         out = binding.flat_outputs[0]
         out[_SOLVED] = np.nan  # a sentinel: the function writes its whole output once it succeeds
         binding.evaluate()
-        return None if np.isnan(out[_SOLVED]) else out.copy()
+        return None if math.isnan(out[_SOLVED]) else out.copy()

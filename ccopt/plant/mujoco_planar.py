@@ -103,6 +103,7 @@ class PlanarPlant(MujocoPlant):
         hand_qpos, hand_dof = joint_slice(m, HAND_JOINTS), joint_slice(m, HAND_JOINTS, velocity=True)
         self._hand_qpos = np.arange(hand_qpos.start, hand_qpos.stop)  # index arrays: reads are copies
         self._hand_dof = np.arange(hand_dof.start, hand_dof.stop)
+        self._hand_angle = hand_qpos.start + 2  # θ_h's address in qpos
         self._ctrl = self._data.ctrl
         self._qpos = self._data.qpos
         self._qvel = self._data.qvel
@@ -170,7 +171,7 @@ class PlanarPlant(MujocoPlant):
 
     def hand_wrench(self) -> np.ndarray:
         """True hand-frame wrench ``(f_n, f_t, τ)`` of the hand on the object, τ about the face centre."""
-        theta_h = float(self._qpos[self._hand_qpos[2]])
+        theta_h = self._qpos.item(self._hand_angle)
         return geometry.wrench_world_to_hand(theta_h, -self._qfrc_constraint[self._hand_dof])
 
     def ground_wrench(self) -> np.ndarray:

@@ -22,6 +22,7 @@ from numbers import Real
 
 import numpy as np
 
+from ccopt import validation
 from ccopt.plant.base import Plant
 
 FAULT_KINDS = {
@@ -214,14 +215,15 @@ class Sensors:
         """The constant F/T bias of this run, hand frame ``(f_n, f_t, τ)``."""
         self._faults = [_FAULT_STAGES[fault.kind](fault) for fault in p.faults]
         self._fault_rng = np.random.default_rng(sequence.spawn(1)[0])
-        self._offsets = np.empty((0, 6))
+        self._pose_offsets = self._wrench_offsets = np.empty((0, 3))  # of the batch's samples
         self._dropped = np.empty(0, dtype=bool)
         self._cursor = 0
 
     def _refill(self) -> None:
         """Draw the next :data:`BATCH` samples' noise (plus bias), dropouts and fault draws at once."""
-        self._offsets = self._rng.standard_normal((BATCH, 6)) * self._sigma
-        self._offsets[:, 3:] += self.bias
+        offsets = self._rng.standard_normal((BATCH, 6)) * self._sigma
+        offsets[:, 3:] += self.bias
+        self._pose_offsets, self._wrench_offsets = offsets[:, :3], offsets[:, 3:]
         self._dropped = self._rng.random(BATCH) < self.params.dropout_probability
         for stage in self._faults:
             stage.refill(self._fault_rng)
@@ -237,15 +239,16 @@ class Sensors:
             return self._read_faulty(k)
         if self._dropped[k]:
             return Measurement(self.plant.time, np.full(3, np.nan), np.full(3, np.nan))
-        offsets = self._offsets[k]
-        return Measurement(
-            self.plant.time, self.plant.hand_pose() + offsets[:3], self.plant.hand_wrench() + offsets[3:]
-        )
+        pose = self.plant.hand_pose() + self._pose_offsets[k]
+        wrench = self.plant.hand_wrench() + self._wrench_offsets[k]
+        sample = {"time": self.plant.time, "hand_pose": pose, "hand_wrench": wrench}
+        return validation.trusted(Measurement, sample)  # well formed by construction
 
     def _read_faulty(self, k: int) -> Measurement:
         """:meth:`read` through the faults: sample ``k`` of the batch, the faults, then the dropouts."""
-        time, offsets = self.plant.time, self._offsets[k]
-        pose, wrench = self.plant.hand_pose() + offsets[:3], self.plant.hand_wrench() + offsets[3:]
+        time = self.plant.time
+        pose = self.plant.hand_pose() + self._pose_offsets[k]
+        wrench = self.plant.hand_wrench() + self._wrench_offsets[k]
         for stage in self._faults:
             if time >= stage.start - _TIME_TOLERANCE:
                 pose, wrench = stage.apply(time, k, pose, wrench)

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ccopt import geometry
+from ccopt import geometry, validation
 from ccopt.objects import PlanarObject
 
 SLIDE_SPEED = 1e-3
@@ -86,10 +86,11 @@ def _mode(rate: float, threshold: float) -> int:
 
 def point_velocity(pose: ArrayLike, velocity: ArrayLike, point: ArrayLike) -> np.ndarray:
     """World velocity of a material ``point`` of a body with ``pose`` and ``velocity`` ``(ẋ, ẏ, ω)``."""
-    x, y, _ = np.asarray(pose, dtype=float)
-    vx, vy, omega = np.asarray(velocity, dtype=float)
-    px, py = np.asarray(point, dtype=float) - (x, y)
-    return np.array([vx - omega * py, vy + omega * px])
+    x, y, _ = np.asarray(pose, dtype=float).tolist()
+    vx, vy, omega = np.asarray(velocity, dtype=float).tolist()
+    px, py = np.asarray(point, dtype=float).tolist()
+    px, py = px - x, py - y
+    return np.array((vx - omega * py, vy + omega * px))
 
 
 def compute_truth(
@@ -118,28 +119,31 @@ def compute_truth(
         vertex = previous_vertex
     r_o = world_vertices[vertex]
     s_h, d = geometry.contact_coordinates(hand_pose, r_o)
-    theta_h = float(hand_pose[2])
-    raw = geometry.face_angle(obj.face_normal(hand_face), float(object_pose[2]))
+    theta_h = hand_pose.item(2)
+    raw = geometry.face_angle(obj.face_normal(hand_face), object_pose.item(2))
     theta_o = theta_h + geometry.wrap_angle(raw - theta_h)
     hand_velocity = np.asarray(hand_velocity, dtype=float)
     v_contact = point_velocity(object_pose, object_velocity, hand_pose[:2])
     hand_slip_rate = float((v_contact - hand_velocity[:2]) @ geometry.hand_tangent(theta_h))
-    ground_slip_rate = float(point_velocity(object_pose, object_velocity, r_o)[0])
+    ground_slip_rate = point_velocity(object_pose, object_velocity, r_o).item(0)
     delta = theta_o - theta_h
-    return Truth(
-        time=float(time),
-        theta_o=theta_o,
-        s_h=s_h,
-        s_g=float(r_o[0]),
-        d=d,
-        r_o=r_o,
-        object_pose=object_pose.copy(),
-        hand_mode=_mode(hand_slip_rate, SLIDE_SPEED),
-        hand_geometry=_mode(delta, PIVOT_ANGLE),
-        ground_mode=_mode(ground_slip_rate, SLIDE_SPEED),
-        in_contact_hand=bool(in_contact_hand),
-        in_contact_ground=bool(in_contact_ground),
-        hand_slip_rate=hand_slip_rate,
-        ground_slip_rate=ground_slip_rate,
-        ground_vertex=vertex,
+    return validation.trusted(  # every field, each well formed by construction (a record sample's)
+        Truth,
+        {
+            "time": float(time),
+            "theta_o": theta_o,
+            "s_h": s_h,
+            "s_g": r_o.item(0),
+            "d": d,
+            "r_o": r_o,
+            "object_pose": object_pose.copy(),
+            "hand_mode": _mode(hand_slip_rate, SLIDE_SPEED),
+            "hand_geometry": _mode(delta, PIVOT_ANGLE),
+            "ground_mode": _mode(ground_slip_rate, SLIDE_SPEED),
+            "in_contact_hand": bool(in_contact_hand),
+            "in_contact_ground": bool(in_contact_ground),
+            "hand_slip_rate": hand_slip_rate,
+            "ground_slip_rate": ground_slip_rate,
+            "ground_vertex": vertex,
+        },
     )
