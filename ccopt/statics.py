@@ -294,11 +294,20 @@ def _solve(
 
 
 class _Problem:
-    """The LPs of one motion at one configuration: what their inputs share, and their solve."""
+    """The LPs of one motion at one configuration: the inputs of :func:`build_statics_lp` they share
+    (``head``: ``p`` and ``keep``; ``lba`` but the two ``|f_n − f_nom|`` rows'; ``uba``; the force
+    limits), and their solve."""
 
-    def __init__(self, head: list[float], keep: list[float], lba: list[float], uba: list[float],
-                 force_limits: tuple[float, float]) -> None:
-        self.head, self.keep, self.lba, self.uba = head, keep, lba, uba  # head: p and keep
+    def __init__(
+        self,
+        head: list[float],
+        keep: list[float],
+        lba: list[float],
+        uba: list[float],
+        force_limits: tuple[float, float],
+    ) -> None:
+        self.head, self.keep, self.lba, self.uba = head, keep, lba, uba
+        self.kept = [row for row, k in enumerate(keep) if k > 0.0]
         self.lower_force, self.upper_force = force_limits
 
     @classmethod
@@ -333,25 +342,27 @@ class _Problem:
         binding.flat_inputs[0][:] = [*self.head, *objective, *lba, *self.uba, *lbx, *ubx]
         binding.evaluate()
         solution = binding.flat_outputs[0].tolist()
-        x, rows = _honest_margin(solution[:_N_UNKNOWNS], solution[_N_UNKNOWNS:], self.keep)
+        x, rows = _honest_margin(solution[:_N_UNKNOWNS], solution[_N_UNKNOWNS:], self.keep, self.kept)
         if not _satisfied(x, rows, lba, self.uba, lbx, ubx):
             return StaticsResult(-math.inf, None)
         return StaticsResult(x[3], np.array(x[:3]))
 
 
-def _honest_margin(x: list[float], rows: list[float], keep: list[float]) -> tuple[list[float], list[float]]:
+def _honest_margin(
+    x: list[float], rows: list[float], keep: list[float], kept: list[int]
+) -> tuple[list[float], list[float]]:
     """The answer with its margin ``t`` lowered to the least kept row's slack where the solver
-    overstated it. DAQP's proximal iterations can stop with a kept row short of ``t`` by a few
-    hundredths of a newton (~0.3 % of random configurations): the wrench is sound, only its margin
-    is not, and calling it infeasible would rule out a possible motion."""
+    overstated it (``kept``: the rows ``keep`` keeps). DAQP's proximal iterations can stop with a
+    kept row short of ``t`` by a few hundredths of a newton (~0.3 % of random configurations): the
+    wrench is sound, only its margin is not, and calling it infeasible would rule out a possible
+    motion."""
     margin = x[3]
-    slack = [row + k * margin for row, k in zip(rows[:N_CONE_ROWS], keep, strict=True)]
-    kept = [value for value, k in zip(slack, keep, strict=True) if k > 0.0]
     if not kept:
         return x, rows
-    least = min(kept)
+    least = min([rows[row] + keep[row] * margin for row in kept])
     if least >= margin:
         return x, rows
+    slack = [row + k * margin for row, k in zip(rows[:N_CONE_ROWS], keep, strict=True)]
     honest = [*x[:3], least, *x[4:]]
     return honest, [value - k * least for value, k in zip(slack, keep, strict=True)] + rows[N_CONE_ROWS:]
 

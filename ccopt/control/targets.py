@@ -27,6 +27,7 @@ commanded to (``Estimate.hand_slid``), ``μ̂_h`` was measured at the limit and 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -135,22 +136,27 @@ class TargetGoal:
 def statics_target(estimate: Estimate, hand_angle: float, motion: Motion, goal: TargetGoal) -> StaticsTarget:
     """The regulation wrench and margin of ``motion`` on the estimated statics, exploring the hand
     friction by ``goal.friction_step`` where ``μ̂_h`` falls short (see the module)."""
-    target = _target(estimate, hand_angle, motion, goal)
+    known = estimated_statics(estimate, hand_angle, motion=motion)
+    target = _target(known, estimate, hand_angle, motion, goal)
     if not (goal.friction_step > 0.0 and target.judged and target.margin < goal.margin):
         return target
     if estimate.hand_slid or not kept_contacts(motion)[0]:
         return target  # measured where the hand slid; a hand slide slides at it: nothing to explore
     mu_h = estimate.mu_h + goal.friction_step
-    bolder = _target(estimate, hand_angle, motion, goal, mu_h)
+    bolder = _target(dataclasses.replace(known, mu_h=mu_h), estimate, hand_angle, motion, goal)
     if bolder.judged and bolder.margin > target.margin:
         return StaticsTarget(bolder.force, bolder.tangential, bolder.margin, mu_h)
     return target
 
 
 def _target(
-    estimate: Estimate, hand_angle: float, motion: Motion, goal: TargetGoal, mu_h: float | None = None
+    known: statics.ObjectStatics | None,
+    estimate: Estimate,
+    hand_angle: float,
+    motion: Motion,
+    goal: TargetGoal,
 ) -> StaticsTarget:
-    known = estimated_statics(estimate, hand_angle, mu_h, motion)
+    """The target of ``motion`` on the statics ``known`` (None: the estimate cannot judge)."""
     if known is None:
         return UNJUDGED
     result = statics.regulation_wrench(
