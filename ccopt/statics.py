@@ -39,7 +39,7 @@ from __future__ import annotations
 import functools
 import itertools
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import casadi as ca
@@ -219,15 +219,52 @@ _INPUT_SIZES = (_N_PARAMETERS, N_CONE_ROWS, _N_UNKNOWNS, _N_ROWS, _N_ROWS, _N_UN
 """Sizes of the LP's inputs ``(p, keep, g, lba, uba, lbx, ubx)``, in order."""
 
 
+def build_answer_checks() -> ca.Function:
+    """``(x, rows, keep, lba, uba, lbx, ubx) → (honest, ok)``: what the LP's answer is worth.
+
+    DAQP's proximal iterations can stop with a kept row short of the margin ``t`` by a few hundredths
+    of a newton (~0.3 % of random configurations): the wrench is sound, only its margin is not, and
+    calling it infeasible would rule out a possible motion. ``honest`` (1 or 0): the least slack
+    ``s_j + t`` of the kept rows is below ``t``, and the answer is taken at that margin (its rows'
+    slack at it). ``ok``: that answer is finite and meets every bound to within
+    :data:`_FEASIBILITY_TOLERANCE`; else the LP was infeasible.
+    """
+    x, rows, keep = ca.SX.sym("x", _N_UNKNOWNS), ca.SX.sym("rows", _N_ROWS), ca.SX.sym("keep", N_CONE_ROWS)
+    lba, uba = ca.SX.sym("lba", _N_ROWS), ca.SX.sym("uba", _N_ROWS)
+    lbx, ubx = ca.SX.sym("lbx", _N_UNKNOWNS), ca.SX.sym("ubx", _N_UNKNOWNS)
+    margin = x[3]
+    slack = rows[:N_CONE_ROWS] + keep * margin
+    least = ca.SX(ca.inf)
+    for row in range(N_CONE_ROWS):
+        least = ca.fmin(least, ca.if_else(keep[row] > 0.0, slack[row], ca.inf))
+    honest = ca.logic_not(least >= margin)
+    answer = ca.vertcat(x[:3], ca.if_else(honest, least, margin), x[4:])
+    answer_rows = ca.vertcat(ca.if_else(honest, slack - keep * least, rows[:N_CONE_ROWS]), rows[N_CONE_ROWS:])
+    tolerance = _FEASIBILITY_TOLERANCE
+    tests = (
+        *ca.vertsplit(ca.fabs(answer) < ca.inf),
+        *ca.vertsplit(lba - tolerance <= answer_rows),
+        *ca.vertsplit(answer_rows <= uba + tolerance),
+        *ca.vertsplit(lbx - tolerance <= answer),
+        *ca.vertsplit(answer <= ubx + tolerance),
+    )
+    ok = functools.reduce(ca.logic_and, tests)
+    inputs, names = [x, rows, keep, lba, uba, lbx, ubx], ["x", "rows", "keep", "lba", "uba", "lbx", "ubx"]
+    return ca.Function("statics_lp_checks", inputs, [ca.vertcat(honest, ok)], names, ["checks"])
+
+
 @functools.cache
 def _solver() -> BufferedFunction:
-    """The LP of :func:`build_statics_lp` on its inputs concatenated into one vector, giving ``x``
-    and the rows as one vector (a solve fills one buffer and reads one), built on first use (each
-    thread evaluates it through its own buffers)."""
-    lp = build_statics_lp()
+    """The LP of :func:`build_statics_lp` on its inputs concatenated into one vector, giving ``x``,
+    the rows and their :func:`build_answer_checks` as one vector (a solve fills one buffer and reads
+    one), built on first use (each thread evaluates it through its own buffers)."""
+    lp, checks = build_statics_lp(), build_answer_checks()
     packed = ca.MX.sym("packed", sum(_INPUT_SIZES))
     inputs = ca.vertsplit(packed, list(itertools.accumulate(_INPUT_SIZES, initial=0)))
-    return BufferedFunction(ca.Function("statics_lp_packed", [packed], [ca.vertcat(*lp(*inputs))]))
+    _, keep, _, lba, uba, lbx, ubx = inputs
+    x, rows = lp(*inputs)
+    answer = ca.vertcat(x, rows, checks(x, rows, keep, lba, uba, lbx, ubx))
+    return BufferedFunction(ca.Function("statics_lp_packed", [packed], [answer]))
 
 
 def _row_bounds(motion: Motion) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -342,29 +379,11 @@ class _Problem:
         binding.flat_inputs[0][:] = [*self.head, *objective, *lba, *self.uba, *lbx, *ubx]
         binding.evaluate()
         solution = binding.flat_outputs[0].tolist()
-        x, rows = _honest_margin(solution[:_N_UNKNOWNS], solution[_N_UNKNOWNS:], self.keep, self.kept)
-        if not _satisfied(x, rows, lba, self.uba, lbx, ubx):
+        x, rows, (honest, ok) = solution[:_N_UNKNOWNS], solution[_N_UNKNOWNS:-2], solution[-2:]
+        if not ok:
             return StaticsResult(-math.inf, None)
-        return StaticsResult(x[3], np.array(x[:3]))
-
-
-def _honest_margin(
-    x: list[float], rows: list[float], keep: list[float], kept: list[int]
-) -> tuple[list[float], list[float]]:
-    """The answer with its margin ``t`` lowered to the least kept row's slack where the solver
-    overstated it (``kept``: the rows ``keep`` keeps). DAQP's proximal iterations can stop with a
-    kept row short of ``t`` by a few hundredths of a newton (~0.3 % of random configurations): the
-    wrench is sound, only its margin is not, and calling it infeasible would rule out a possible
-    motion."""
-    margin = x[3]
-    if not kept:
-        return x, rows
-    least = min([rows[row] + keep[row] * margin for row in kept])
-    if least >= margin:
-        return x, rows
-    slack = [row + k * margin for row, k in zip(rows[:N_CONE_ROWS], keep, strict=True)]
-    honest = [*x[:3], least, *x[4:]]
-    return honest, [value - k * least for value, k in zip(slack, keep, strict=True)] + rows[N_CONE_ROWS:]
+        margin = min([rows[row] + self.keep[row] * x[3] for row in self.kept]) if honest else x[3]
+        return StaticsResult(margin, np.array(x[:3]))
 
 
 def best_wrench(
@@ -415,21 +434,6 @@ def regulation_wrench(
     least = min(best.margin, margin_goal) - _FEASIBILITY_TOLERANCE
     found = problem.solve(_NEAREST_FORCE, least, nominal_force)
     return StaticsResult(least, found.wrench) if found.wrench is not None else best
-
-
-def _satisfied(*values: Sequence[float]) -> bool:
-    """Whether the LP's answer ``x`` and rows meet their bounds: else the LP was infeasible."""
-    x, rows, lba, uba, lbx, ubx = values
-    return all(map(math.isfinite, x)) and _within(rows, lba, uba) and _within(x, lbx, ubx)
-
-
-def _within(values: Sequence[float], lower: Sequence[float], upper: Sequence[float]) -> bool:
-    """Whether every value lies within its bounds up to :data:`_FEASIBILITY_TOLERANCE` (False for NaN)."""
-    tolerance = _FEASIBILITY_TOLERANCE
-    for value, low, high in zip(values, lower, upper, strict=True):
-        if not low - tolerance <= value <= high + tolerance:
-            return False
-    return True
 
 
 # --- the experimenter's oracle: a known object as a run starts it ---------------------------------
