@@ -674,6 +674,8 @@ class _Loop:
         self.target = np.array(self.plant.target(), dtype=float)
         self.velocity = np.zeros(3)
         self.timestep = self.plant.timestep
+        self.now = self.plant.time
+        """The plant's time after its last step, s."""
         self.pending = list(params.perturbations)
         self.last_solution: tuple[float, bool] = (0.0, True)
         self.statics_period = params.ticks(params.statics_hz) * params.plant_params.timestep
@@ -714,7 +716,7 @@ class _Loop:
                     break
                 if tick % controller_every == 0:
                     self._control()
-                if self.plant.time >= limit:
+                if self.now >= limit:
                     self._stop("timeout", f"the run's time limit of {limit:g} s (simulated) ran out")
         except KeyboardInterrupt:
             self.status, self.message = "interrupted", "interrupted"
@@ -730,6 +732,7 @@ class _Loop:
             push = self.pending.pop(0)
             plant.push_object(push.force, push.duration)
         plant.step(1)
+        self.now = plant.time
 
     def _sense(self) -> None:
         reading = self.sensors.read()
@@ -766,7 +769,7 @@ class _Loop:
         if self._contact_lost():
             return
         tracker, estimate, hand_pose = self.tracker, self.estimate, self.hand_pose
-        coordinates = tracker.update(self.plant.time, estimate, hand_pose)
+        coordinates = tracker.update(self.now, estimate, hand_pose)
         if tracker.done:
             return
         if tracker.rolling and modes.REMOVED_ROWS[tracker.step.motion]:
@@ -778,7 +781,7 @@ class _Loop:
         if tracker.fresh and tracker.step.kind != "hold":
             reason = self._ruled_out(aim, estimate, hand_pose)
             if reason:
-                tracker.advance(self.plant.time, estimate, hand_pose, "infeasible", reason)
+                tracker.advance(self.now, estimate, hand_pose, "infeasible", reason)
                 return
         tracker.fresh = False
         output = self.controller.update(control_input(estimate, hand_pose, coordinates, aim), tracker.command)
@@ -786,13 +789,13 @@ class _Loop:
         self.velocity = geometry.twist_hand_to_world(hand_pose[2], output.step) / self.controller.period
         self._check_solved(not output.solved)
         if self.on_tick is not None:
-            self.on_tick(self.plant.time, tracker.index, len(self.schedule.steps))
+            self.on_tick(self.now, tracker.index, len(self.schedule.steps))
 
     def _check_solved(self, failed: bool) -> None:
         """End the run (``error``) once the QP solver has given no finite step for ``solver_grace``:
         the controller holds the target on such a tick (:meth:`Controller.update`), which would
         otherwise go on until the time limit."""
-        now = self.plant.time
+        now = self.now
         if not failed:
             self.unsolved_since = None
         elif self.unsolved_since is None:
@@ -803,7 +806,7 @@ class _Loop:
     def _aim(self, estimate: Estimate, hand_pose: np.ndarray) -> StaticsTarget:
         """The estimated statics' target of the command: evaluated afresh at a step's start and once
         a statics period (:attr:`LoopParams.statics_hz`) has passed, else the last one."""
-        now, last = self.plant.time, self.last_aim
+        now, last = self.now, self.last_aim
         if self.tracker.fresh or last is None or now - last[0] >= self.statics_period - 1e-9:
             motion = self.tracker.command.motion
             self.last_aim = (now, statics_target(estimate, float(hand_pose[2]), motion, self.goal))
@@ -825,7 +828,7 @@ class _Loop:
     def _contact_lost(self) -> bool:
         """Whether the hand has lost the object: after a grace time the target presses along ``e_n``
         to find it again; if it has not after ``recontact_distance``, the run stops."""
-        rules, now = self.params.supervision, self.plant.time
+        rules, now = self.params.supervision, self.now
         if self.estimate.wrench[0] > rules.contact_force:
             self.lost_since = self.lost_pose = None
             return False

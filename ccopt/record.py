@@ -218,6 +218,7 @@ class RecordWriter:
         self.meta = {**meta, "status": "running", "versions": versions(), "run_id": self.run_id}
         self.flush_every = flush_every
         self._keys: tuple[str, ...] = ()
+        self._key_set: frozenset[str] = frozenset()
         self._rows: list[dict[str, np.ndarray]] = []
         self._count = 0
         self._chunks = 0
@@ -232,9 +233,9 @@ class RecordWriter:
         if not self._keys:
             if RUN_ID_KEY in sample:
                 raise ValueError(f"{RUN_ID_KEY!r} is reserved and cannot be a sample key")
-            self._keys = tuple(sample)
-        elif sample.keys() != set(self._keys):
-            raise ValueError(f"sample keys changed: {sorted(set(sample) ^ set(self._keys))}")
+            self._keys, self._key_set = tuple(sample), frozenset(sample)
+        elif sample.keys() != self._key_set:
+            raise ValueError(f"sample keys changed: {sorted(set(sample) ^ self._key_set)}")
         row = {key: np.asarray(value) for key, value in sample.items()}
         self._rows.append(row)
         self._count += 1
