@@ -254,7 +254,7 @@ class PandaPlant(MujocoPlant):
 
     def set_target(self, pose: ArrayLike, velocity: ArrayLike | None = None) -> None:
         """Hand impedance target, world ``(x, y, θ)`` (m, rad), and its velocity (m/s, rad/s)."""
-        x, y, theta = planar_vector("target pose", pose)
+        x, y, theta = planar_vector("target pose", pose).tolist()
         if theta != self._target[2]:
             self._target_rotation[:] = hand_rotation(theta)
         self._target[:] = (x, y, theta)
