@@ -60,31 +60,13 @@ def tight_direction(margin_pos: float, margin_neg: float, threshold: float, esti
     return 1 if margin_pos <= margin_neg else -1
 
 
-class _Latch:
-    """Holds a non-zero report for ``hold_time`` after it was last seen."""
-
-    __slots__ = ("hold_time", "until", "value")
-
-    def __init__(self, hold_time: float) -> None:
-        self.hold_time = hold_time
-        self.value = 0
-        self.until = -math.inf
-
-    def update(self, time: float, raw: int) -> int:
-        if raw != 0:
-            self.value, self.until = raw, time + self.hold_time
-        elif time >= self.until:
-            self.value = 0
-        return self.value
-
-
 _CONTACT_ROWS = (
     (Row.HAND_SLIDE_POS, Row.HAND_SLIDE_NEG),
     (Row.HAND_PIVOT_POS, Row.HAND_PIVOT_NEG),
     (Row.GROUND_SLIDE_POS, Row.GROUND_SLIDE_NEG),
 )
 """The rows blocking the positive and negative motion of the hand slide, hand pivot, ground slide."""
-(_SP, _SN), (_PP, _PN), (_GP, _GN) = ((int(pos), int(neg)) for pos, neg in _CONTACT_ROWS)
+_ROW_PAIRS = tuple((int(pos), int(neg)) for pos, neg in _CONTACT_ROWS)
 _CONFIGURATIONS = {
     (hand, pivot, ground): ContactConfiguration(ContactMode(hand), HandGeometry(pivot), ContactMode(ground))
     for hand in (-1, 0, 1)
@@ -99,8 +81,11 @@ class ModeClassifier:
 
     def __init__(self, params: ModeParams | None = None) -> None:
         self.params = params if params is not None else ModeParams()
-        self._thresholds = (self.params.slide_margin, self.params.pivot_margin, self.params.ground_margin)
-        self._latches = tuple(_Latch(self.params.hold_time) for _ in _CONTACT_ROWS)
+        thresholds = (self.params.slide_margin, self.params.pivot_margin, self.params.ground_margin)
+        self._contacts = tuple(zip(range(3), thresholds, _ROW_PAIRS, strict=True))
+        self._hold_time = self.params.hold_time
+        self._values = [0, 0, 0]  # the latched reports of the hand slide, hand pivot, ground slide
+        self._until = [-math.inf] * 3  # the time each report is held until
 
     def update(
         self, time: float, margins: Sequence[float], estimated: Sequence[bool]
@@ -112,10 +97,13 @@ class ModeClassifier:
             margins: ``b − N w`` of the estimated cone (6 values), order :class:`~ccopt.contact.Row`.
             estimated: per row, whether the row is estimated (6 values).
         """
-        m, e = margins, estimated
-        (slide, pivot, ground), (hand_latch, pivot_latch, ground_latch) = self._thresholds, self._latches
-        return _CONFIGURATIONS[  # unrolled over the three contacts (rows in Row order): every sample
-            hand_latch.update(time, tight_direction(m[_SP], m[_SN], slide, e[_SP] and e[_SN])),
-            pivot_latch.update(time, tight_direction(m[_PP], m[_PN], pivot, e[_PP] and e[_PN])),
-            ground_latch.update(time, tight_direction(m[_GP], m[_GN], ground, e[_GP] and e[_GN])),
-        ]
+        values, until = self._values, self._until
+        for contact, threshold, (pos, neg) in self._contacts:
+            # tight_direction, written out (every sample, for each contact of both classifiers)
+            if estimated[pos] and estimated[neg] and min(margins[pos], margins[neg]) > threshold:
+                if time >= until[contact]:  # nothing tight: a report is held for hold_time
+                    values[contact] = 0
+            else:
+                values[contact] = 1 if margins[pos] <= margins[neg] else -1
+                until[contact] = time + self._hold_time
+        return _CONFIGURATIONS[values[0], values[1], values[2]]

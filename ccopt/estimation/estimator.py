@@ -54,11 +54,13 @@ from ccopt.estimation.quantile import check_number
 from ccopt.hand import Hand
 from ccopt.modes import ContactConfiguration, ContactMode, HandGeometry
 
+_FLUSH = HandGeometry.FLUSH
+
 
 def _flat_cone_rows() -> BufferedFunction:
     """:data:`ccopt.contact.cone_rows` and the margins ``b − N w`` on one flat input
-    ``(θ_h, μ_h, l_h, vec(A) (column-major), b, w)`` with one flat output ``(N row by row, b, b − N w)``,
-    for :meth:`BufferedFunction.call_flat`."""
+    ``(θ_h, μ_h, l_h, vec(A) (column-major), b, w)`` with one flat output ``(N row by row, b, b − N w)``
+    for :meth:`BufferedFunction.buffers`."""
     flat = ca.SX.sym("cone_input", 12)
     n_rows, b = contact.cone_rows(flat[0], flat[1], flat[2], ca.reshape(flat[3:7], 2, 2), flat[7:9])
     output = ca.vertcat(ca.vec(n_rows.T), b, b - n_rows @ flat[9:12])
@@ -239,6 +241,9 @@ class Estimator:
         self.ground_slides = SlideEvidence(self.params.slid_distance)
         self.hand_slides = SlideEvidence(self.params.slid_distance)
         self._cone_input = np.zeros(12)
+        self._contact_force = self.params.contact_force
+        self._theta_noise = self.params.theta_filter.noise
+        self._last_reports: tuple = (None,) * 5  # (likely, commanded, unobservable, ground, reports)
         self._cone_ground: GroundCone | None = None
         self._last: Estimate | None = None
 
@@ -262,57 +267,51 @@ class Estimator:
         try:
             time = float(time)
             pose = np.asarray(hand_pose, dtype=float)
-            wrench = np.array(hand_wrench, dtype=float)
+            wrench = np.asarray(hand_wrench, dtype=float)
         except OverflowError:  # an integer beyond the float range
             raise ValueError("time, hand_pose and hand_wrench must be within the float range") from None
         if pose.shape != (3,) or wrench.shape != (3,):
             raise ValueError(
                 f"hand_pose and hand_wrench must have shape (3,), got {pose.shape} and {wrench.shape}"
             )
-        values = [time, *pose.tolist(), *wrench.tolist()]
-        if not _within_bounds(values):
+        pose_values, wrench_values = pose.tolist(), wrench.tolist()
+        x_h, y_h, theta_h = pose_values
+        f_n, f_t, torque = wrench_values
+        if not _within_bounds(time, x_h, y_h, theta_h, f_n, f_t, torque):
             return self._skip(time)
-        _, x_h, y_h, theta_h, f_n, f_t, torque = values
         axes = geometry.hand_axes(theta_h)
-        in_contact = f_n > self.params.contact_force
+        in_contact = f_n > self._contact_force
         friction = self.friction
         if in_contact:
             friction.update(f_n, f_t)
             self.ground.update(time, geometry.hand_to_world(axes, f_n, f_t))
         ground = self.ground.cone
-        cone = self._cone(theta_h, friction.mu_h, friction.l_h_eff, ground, wrench)
+        mu_h, lever = friction.mu_h, friction.l_h_eff
+        cone, margins = self._cone(theta_h, mu_h, lever, ground, f_n, f_t, torque)
         valid, row_valid = _ROW_VALID[friction.valid, ground.valid]
-        margins = cone[2].tolist()
         modes = self.classifier.update(time, margins, valid)
         likely = self.kinematic_classifier.update(time, margins, valid)
-        kept, ground_may_slide, hand_may_slide, both = _kinematic_reports(
-            likely, commanded, self._split_unobservable(theta_h)
-        )
+        kept, ground_may_slide, hand_may_slide, both = self._reports(likely, commanded, theta_h, ground)
         kinematics = self.kinematics.update(
-            pose,
-            *axes,
-            kept if both else kinematic_modes(kept, ground),
-            in_contact,
-            ground_may_slide,
-            torque,
-            hand_may_slide,
-            f_n,
+            pose, *axes, kept, in_contact, ground_may_slide, torque, hand_may_slide, f_n
         )
         theta_o = kinematics.theta_o
-        if in_contact and kinematics.theta_o_valid and likely.hand_geometry == HandGeometry.FLUSH:
+        if in_contact and kinematics.theta_o_valid and likely.hand_geometry == _FLUSH:
             theta_o = self.theta_filter.update(time, theta_o)
         else:
             self.theta_filter.reset()
         gravity = self.gravity.update(
-            theta_o, [x_h, y_h, theta_h], [f_n, f_t, torque], kinematics, self.kinematics.ground_contact()
+            theta_o, pose_values, wrench_values, kinematics, self.kinematics.ground_contact()
         )
         slid = self._slid(commanded, kinematics, theta_h, both)
+        hand_slid = self.hand_slides.slid
         self._last = _assemble(
             time,
-            wrench,
+            np.frombuffer(wrench.tobytes()),  # a read-only copy
             cone,
             row_valid,
-            friction,
+            mu_h,
+            lever,
             ground,
             modes,
             in_contact,
@@ -322,9 +321,29 @@ class Estimator:
             self._rough(theta_o, kinematics),
             gravity,
             slid,
-            self.hand_slides.slid[0] or self.hand_slides.slid[1],
+            hand_slid[0] or hand_slid[1],
         )
         return self._last
+
+    def _reports(
+        self,
+        likely: ContactConfiguration,
+        commanded: ContactConfiguration | None,
+        theta_h: float,
+        ground: GroundCone,
+    ) -> tuple[ContactConfiguration, bool, bool, bool]:
+        """``(modes, ground_may_slide, hand_may_slide, both)`` for the kinematics
+        (:func:`_kinematic_reports`, the modes through :func:`kinematic_modes` unless both may slide).
+        The last inputs and reports are kept: the configurations and the cone are immutable, and the
+        same objects for many samples in a row."""
+        unobservable = self._split_unobservable(theta_h)
+        last = self._last_reports
+        if likely is last[0] and commanded is last[1] and unobservable == last[2] and ground is last[3]:
+            return last[4]
+        kept, ground_may_slide, hand_may_slide, both = _kinematic_reports(likely, commanded, unobservable)
+        reports = (kept if both else kinematic_modes(kept, ground), ground_may_slide, hand_may_slide, both)
+        self._last_reports = (likely, commanded, unobservable, ground, reports)
+        return reports
 
     def _split_unobservable(self, theta_h: float) -> bool:
         """Whether a hand at its measured friction limit in a ground slide leaves the kinematics
@@ -341,25 +360,36 @@ class Estimator:
         """``(kinematics_mean, kinematics_std)`` of the :class:`Estimate`."""
         d, x_o, _, s_h = kinematics.rough
         std_d, std_x, _, std_s = kinematics.std
-        theta_std = math.hypot(kinematics.theta_std, self.params.theta_filter.noise)
+        theta_std = math.hypot(kinematics.theta_std, self._theta_noise)
         theta = theta_o if kinematics.theta_o_valid else math.nan
         return (theta, s_h, x_o, d), (theta_std, std_s, std_x, std_d)
 
     def _cone(
-        self, theta_h: float, mu_h: float, l_h: float, ground: GroundCone, wrench: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Read-only ``(N (6×3), b (6), b − N w (6))`` of :data:`ccopt.contact.cone_rows` (hand frame)."""
+        self,
+        theta_h: float,
+        mu_h: float,
+        l_h: float,
+        ground: GroundCone,
+        f_n: float,
+        f_t: float,
+        torque: float,
+    ) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray], list[float]]:
+        """Read-only ``(N (6×3), b (6), b − N w (6))`` of :data:`ccopt.contact.cone_rows` (hand frame)
+        for the wrench ``w = (f_n, f_t, τ)``, and the margins ``b − N w`` as floats."""
         flat = self._cone_input
         flat[0], flat[1], flat[2] = theta_h, mu_h, l_h
         if ground is not self._cone_ground:  # the ground rows change only when refitted
             flat[3:7] = ground.A.ravel(order="F")
             flat[7:9] = ground.b
             self._cone_ground = ground
-        flat[9:12] = wrench
-        out = _CONE_ROWS.call_flat(flat)
-        out.flags.writeable = False
+        flat[9], flat[10], flat[11] = f_n, f_t, torque
+        buffers = _CONE_ROWS.buffers()
+        buffers.flat_inputs[0][:] = flat
+        buffers.evaluate()
+        values = np.frombuffer(buffers.flat_outputs[0].tobytes())  # a read-only copy
         rows = 3 * N_CONE_ROWS
-        return out[:rows].reshape(N_CONE_ROWS, 3), out[rows : rows + N_CONE_ROWS], out[rows + N_CONE_ROWS :]
+        bounds, margins = values[rows : rows + N_CONE_ROWS], values[rows + N_CONE_ROWS :]
+        return (values[:rows].reshape(N_CONE_ROWS, 3), bounds, margins), margins.tolist()
 
     def _slid(
         self,
@@ -383,10 +413,11 @@ class Estimator:
         return dataclasses.replace(self._last, time=float(time), skipped=True)
 
 
-def _within_bounds(values: list[float]) -> bool:
+def _within_bounds(
+    time: float, x_h: float, y_h: float, theta_h: float, f_n: float, f_t: float, torque: float
+) -> bool:
     """Whether each of a sample's ``(time, x_h, y_h, θ_h, f_n, f_t, τ)`` is within its
     :data:`SAMPLE_BOUNDS` (False for NaN)."""
-    time, x_h, y_h, theta_h, f_n, f_t, torque = values
     b_time, b_x, b_y, b_theta, b_n, b_t, b_torque = SAMPLE_BOUNDS
     return (
         abs(time) <= b_time
@@ -574,7 +605,7 @@ _GROUND_STICKING = {
 """Every configuration with the ground sticking, by ``(hand mode, hand geometry)`` (immutable)."""
 
 
-def _read_only(values: tuple[bool, ...]) -> np.ndarray:
+def _read_only(values: tuple[bool | float, ...]) -> np.ndarray:
     array = np.array(values)
     array.flags.writeable = False
     return array
@@ -595,7 +626,8 @@ def _assemble(
     wrench: np.ndarray,
     cone: tuple[np.ndarray, np.ndarray, np.ndarray],
     row_valid: np.ndarray,
-    friction: HandFrictionEstimator,
+    mu_h: float,
+    torque_lever: float,
     ground: GroundCone,
     modes: ContactConfiguration,
     in_contact: bool,
@@ -607,11 +639,9 @@ def _assemble(
     slid: tuple[bool, bool],
     hand_slid: bool,
 ) -> Estimate:
-    """An :class:`Estimate` from its parts (``wrench`` made read-only; the cone and ``row_valid``
-    are); ``rough`` is ``(kinematics_mean, kinematics_std)``, ``slid`` the ways the ground was seen
-    sliding."""
+    """An :class:`Estimate` from its parts (the arrays read-only); ``rough`` is ``(kinematics_mean,
+    kinematics_std)``, ``slid`` the ways the ground was seen sliding."""
     fitted = (ground.fitted[0] and slid[0], ground.fitted[1] and slid[1])
-    wrench.flags.writeable = False
     cone_rows, cone_bounds, margins = cone
     return validation.trusted(  # every field, each well formed by construction
         Estimate,
@@ -622,8 +652,8 @@ def _assemble(
             "cone_bounds": cone_bounds,
             "margins": margins,
             "row_valid": row_valid,
-            "mu_h": friction.mu_h,
-            "torque_lever": friction.l_h_eff,
+            "mu_h": mu_h,
+            "torque_lever": torque_lever,
             "ground_rows": ground.A,
             "ground_bounds": ground.b,
             "mu_g": ground.mu_g if fitted[0] and fitted[1] else math.nan,
@@ -661,7 +691,8 @@ def _empty_estimate(time: float, friction: HandFrictionEstimator, ground: Ground
     """The estimate before any finite sample: no cone (NaN), nothing valid, not in contact."""
     nan = np.full(N_CONE_ROWS, math.nan)
     cone = (np.full((N_CONE_ROWS, 3), math.nan), nan, nan.copy())
-    parts = (np.full(3, math.nan), cone, _read_only((False,) * N_CONE_ROWS), friction, ground.cone)
+    wrench, row_valid = _read_only((math.nan,) * 3), _read_only((False,) * N_CONE_ROWS)
+    parts = (wrench, cone, row_valid, friction.mu_h, friction.l_h_eff, ground.cone)
     unknown = ((math.nan,) * 4, (math.nan,) * 4)
     return _assemble(
         time,

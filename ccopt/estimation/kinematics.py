@@ -113,6 +113,7 @@ _Frame = tuple[float, float, float, float, float, float]
 """The estimated object frame of one sample and its wrench: ``(ê_n, ê_t, τ, f_n − f_ref)`` flattened
 (world, N·m, N)."""
 _PIVOT_ITERATIONS = 8
+_STICK, _FLUSH = ContactMode.STICK, HandGeometry.FLUSH
 
 
 @dataclass(frozen=True)
@@ -258,6 +259,9 @@ class KinematicEstimator:
         self._height_variance = self.params.follow_height_noise**2
         self._hand_slip_gate_squared = self.params.hand_slip_gate**2
         params = self.params
+        self._reference_force = params.reference_force
+        self._excitation_angle = params.excitation_angle
+        self._valid_std, self._rough_std = params.valid_std, params.rough_std
         self._state = [0.0, 0.0, 0.0, 0.0, params.compliance_prior, params.normal_compliance_prior]
         self._cov = [[0.0] * _SIZE for _ in range(_SIZE)]
         self._cov[C][C] = params.compliance_std**2
@@ -305,10 +309,10 @@ class KinematicEstimator:
         in (None: ``reference_force``).
         """
         pose = hand_pose.tolist()
-        flush = modes.hand_geometry == HandGeometry.FLUSH
-        ground_sticks = modes.ground_mode == ContactMode.STICK
-        hand_sticks = modes.hand_mode == ContactMode.STICK
-        force = 0.0 if normal_force is None else normal_force - self.params.reference_force
+        flush = modes.hand_geometry == _FLUSH
+        ground_sticks = modes.ground_mode == _STICK
+        hand_sticks = modes.hand_mode == _STICK
+        force = 0.0 if normal_force is None else normal_force - self._reference_force
         frame = self._object_frame(e_n, e_t, torque, force)
         self._ground_slipping = self._ground_slipping and ground_may_slide
         pivot_ok, fixed = True, False
@@ -360,7 +364,7 @@ class KinematicEstimator:
             self._measure_normal(pose, frame)
         last = self._last_theta
         self._excited = (
-            math.isnan(last) or abs(math.remainder(pose[2] - last, math.tau)) >= self.params.excitation_angle
+            math.isnan(last) or abs(math.remainder(pose[2] - last, math.tau)) >= self._excitation_angle
         )
         row, value = self._tangent_row(pose, frame)
         gate = self._hand_slip_gate_squared if hand_may_slide else self._gate_squared
@@ -529,9 +533,9 @@ class KinematicEstimator:
         return s * cos - d * sin, variance
 
     def _estimate(self, s_h_defined: bool, torque: float, fixed: bool) -> KinematicEstimate:
-        state, cov, params = self._state, self._cov, self.params
+        state, cov, valid_std = self._state, self._cov, self._valid_std
         s_h, s_h_variance = self._hand_frame_s_h(torque)
-        sqrt, nan, rough_std = math.sqrt, math.nan, params.rough_std
+        sqrt, nan, rough_std = math.sqrt, math.nan, self._rough_std
         var_d, var_x, var_y, var_c = cov[D][D], cov[X_O][X_O], cov[Y_O][Y_O], cov[C][C]
         std = (  # sqrt(max(v, 0.0)), the max written out (a call costs more): NaN and -0.0 kept
             sqrt(0.0 if var_d < 0.0 else var_d),
@@ -548,8 +552,8 @@ class KinematicEstimator:
             y_o if std[2] <= rough_std else nan,
             s_h if std[3] <= rough_std else nan,
         )
-        contact_valid = max(std[0], std[1], std[2]) <= params.valid_std
-        s_h_valid = s_h_defined and contact_valid and std[3] <= params.valid_std
+        contact_valid = max(std[0], std[1], std[2]) <= valid_std
+        s_h_valid = s_h_defined and contact_valid and std[3] <= valid_std
         return validation.trusted(  # every field, each well formed by construction
             KinematicEstimate,
             {
