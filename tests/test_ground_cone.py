@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import collections
 import math
 
 import numpy as np
@@ -154,6 +155,68 @@ def test_half_plane_polygon_drops_lines_that_do_not_touch():
     active, vertices = half_plane_polygon(directions, support)
     assert active == [0, 2, 4, 6]
     np.testing.assert_allclose(vertices, [[1.0, 1.0], [-1.0, 1.0], [-1.0, -1.0], [1.0, -1.0]], atol=1e-12)
+
+
+def _straightforward_half_plane_polygon(
+    directions: np.ndarray, support: np.ndarray
+) -> tuple[list[int], list[tuple[float, float]]]:
+    """The sorted-angle deque sweep as first written (a corner function, the tests in the loop
+    conditions): the reference of :func:`half_plane_polygon`'s inlined sweep."""
+    ux, uy, h = directions[:, 0].tolist(), directions[:, 1].tolist(), support.tolist()
+
+    def corner(i: int, j: int) -> tuple[float, float]:
+        det = ux[i] * uy[j] - uy[i] * ux[j]
+        if det == 0.0:
+            return math.nan, math.nan
+        return (uy[j] * h[i] - uy[i] * h[j]) / det, (ux[i] * h[j] - ux[j] * h[i]) / det
+
+    def outside(k: int, point: tuple[float, float]) -> bool:
+        return ux[k] * point[0] + uy[k] * point[1] > h[k]
+
+    lines, corners = collections.deque(), collections.deque()
+    for k in range(len(h)):
+        while corners and outside(k, corners[-1]):
+            lines.pop()
+            corners.pop()
+        while corners and outside(k, corners[0]):
+            lines.popleft()
+            corners.popleft()
+        if lines:
+            corners.append(corner(lines[-1], k))
+        lines.append(k)
+    while len(corners) >= 2 and outside(lines[0], corners[-1]):
+        lines.pop()
+        corners.pop()
+    while len(corners) >= 2 and outside(lines[-1], corners[0]):
+        lines.popleft()
+        corners.popleft()
+    corners.append(corner(lines[-1], lines[0]))
+    return list(lines), list(corners)
+
+
+@pytest.mark.parametrize("count", [4, 8, 9, 64])
+def test_half_plane_polygon_is_the_straightforward_sweep_bit_for_bit(count):
+    """Random hulls and degenerate ones (a point or a segment: concurrent lines, support values
+    equal to the last bit, noise on them; with exact axes, loose lines that leave parallel ones
+    adjacent), the same lines and corners to the bit."""
+    rng = np.random.default_rng(count)
+    angles = 2.0 * np.pi * np.arange(count) / count
+    directions = np.column_stack((np.cos(angles), np.sin(angles)))
+    if count == 4:  # exactly parallel opposite lines
+        directions = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
+    for trial in range(300):
+        points = rng.normal(size=(1 + trial % 7 if trial % 3 else 30, 2)) * rng.uniform(0.1, 10.0, 2)
+        support = np.max(points @ directions.T, axis=0)
+        if trial % 4 == 1:
+            support = support + rng.normal(0.0, 0.05, count)
+        elif trial % 4 == 2:
+            support = np.round(support, 1)
+        elif trial % 8 == 3:
+            support[rng.integers(count)] = 1e3  # a loose line
+        active, vertices = half_plane_polygon(directions, support)
+        expected_active, expected_vertices = _straightforward_half_plane_polygon(directions, support)
+        assert active == expected_active
+        assert np.array(vertices).tobytes() == np.array(expected_vertices).tobytes()
 
 
 def test_fit_without_finite_support_is_the_prior():

@@ -62,6 +62,8 @@ hull's top, where the force is smallest; faces within 3° of the horizontal or b
 friction faces but the hull's sides and bottom, where the data end (on a closed-loop recording of
 the paper triangle, the edge of the hand forces of pivots at a tilted hand, ``up·ν = −0.18``, passed
 for a friction face and ruled out the pivots beyond it)."""
+_NO_CORNER = (math.nan, math.nan)
+"""Where two parallel lines meet (:func:`half_plane_polygon`)."""
 FACE_WINDOW_STEPS = 2.1
 """A face's polygon edges have normals within this many direction steps of the face's normal."""
 
@@ -204,7 +206,7 @@ def _fit_rows(
     if not np.isfinite(support).all():
         return None
     active, vertices = half_plane_polygon(directions, support)
-    if not math.isfinite(sum(x + y for x, y in vertices)):
+    if not math.isfinite(sum([x + y for x, y in vertices])):
         return None
     rows = _prior_rows(WORLD_UP, params.mu_prior, vertices)
     edges = _edges(directions[active].tolist(), vertices)
@@ -245,15 +247,27 @@ def half_plane_polygon(
 
     lines: deque[int] = deque()  # active lines, by angle
     corners: deque[tuple[float, float]] = deque()  # corners[i]: lines[i] meets lines[i + 1]
-    for k, (a, b, c) in enumerate(zip(ux, uy, h, strict=True)):  # "outside" of line k inline
-        while corners and a * corners[-1][0] + b * corners[-1][1] > c:
-            lines.pop()
-            corners.pop()
-        while corners and a * corners[0][0] + b * corners[0][1] > c:
-            lines.popleft()
-            corners.popleft()
-        if lines:
-            corners.append(corner(lines[-1], k))
+    for k, a, b, c in zip(range(len(h)), ux, uy, h, strict=True):  # every sample's fit: inline
+        if corners:
+            x, y = corners[-1]
+            while a * x + b * y > c:  # the last corner is outside line k
+                lines.pop()
+                corners.pop()
+                if not corners:
+                    break
+                x, y = corners[-1]
+            while corners:
+                x, y = corners[0]
+                if not a * x + b * y > c:  # the first corner is inside line k
+                    break
+                lines.popleft()
+                corners.popleft()
+        if lines:  # corner(lines[-1], k)
+            i = lines[-1]
+            det = ux[i] * b - uy[i] * a
+            corners.append(
+                ((b * h[i] - uy[i] * c) / det, (ux[i] * c - a * h[i]) / det) if det != 0.0 else _NO_CORNER
+            )
         lines.append(k)
     while len(corners) >= 2 and _outside(ux, uy, h, lines[0], corners[-1]):
         lines.pop()
@@ -307,7 +321,8 @@ def _prior_rows(up: tuple[float, float], mu_prior: float, vertices: list[tuple[f
     rows = []
     for side in (1.0, -1.0):
         normal = ((side * up[1] + mu_prior * up[0]) / scale, (-side * up[0] + mu_prior * up[1]) / scale)
-        offset = max([normal[0] * x + normal[1] * y for x, y in vertices])
+        nx, ny = normal
+        offset = max([nx * x + ny * y for x, y in vertices])
         rows.append((normal, offset, 0.0))
     return rows
 
@@ -316,9 +331,10 @@ def _edges(
     normals: list[list[float]], vertices: list[tuple[float, float]]
 ) -> list[tuple[float, float, float]]:
     """Per polygon edge ``i`` (from vertex ``i − 1`` to ``i``, on line ``normals[i]``): normal and length."""
+    starts = [vertices[-1], *vertices[:-1]]
     return [
-        (normal[0], normal[1], math.dist(vertices[index - 1], vertices[index]))
-        for index, normal in enumerate(normals)
+        (nx, ny, math.dist(start, end))
+        for (nx, ny), start, end in zip(normals, starts, vertices, strict=True)
     ]
 
 
@@ -337,10 +353,10 @@ def _friction_face(
     the face is every consecutive edge whose normal is within ``window`` (rad) of the seed chord's,
     and the row is the chord from the first one's start to the last one's end — the face's ends.
     """
-    right = (side * up[1], -side * up[0])
+    (up_x, up_y), (right_x, right_y) = up, (side * up[1], -side * up[0])
     low, high = FACE_COSINE_RANGE
     candidate = [
-        nx * right[0] + ny * right[1] > 0.0 and low <= nx * up[0] + ny * up[1] <= high for nx, ny, _ in edges
+        nx * right_x + ny * right_y > 0.0 and low <= nx * up_x + ny * up_y <= high for nx, ny, _ in edges
     ]
     count, best, first = len(edges), 0.0, -1
     for index in itertools.compress(range(count), candidate):
