@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import copy
 import math
+import pickle
 
 import numpy as np
 import pytest
@@ -92,6 +94,22 @@ def test_bank_matches_numpy_and_skips_non_finite_rows():
     assert bank.count == len(samples)
     truth = np.quantile(samples, 0.99, axis=0)
     assert np.all(np.abs(bank.values - truth) <= 0.01 * np.abs(truth))
+
+
+@pytest.mark.parametrize("copy_bank", [copy.deepcopy, lambda bank: pickle.loads(pickle.dumps(bank))])
+def test_a_copied_bank_goes_on_like_the_original(copy_bank):
+    """A copy (e.g. an estimator's pickled state) steps its own arrays, to the bit as the original."""
+    rng = np.random.default_rng(5)
+    bank = P2QuantileBank(0.9, 70)  # two blocks
+    for _ in range(20):
+        bank.add(rng.normal(size=70))
+    copied = copy_bank(bank)
+    for _ in range(50):
+        row = rng.normal(size=70)
+        bank.add(row)
+        copied.add(row)
+    assert copied.values.tobytes() == bank.values.tobytes()
+    assert copied.count == bank.count
 
 
 def test_marker_levels_are_classic_in_the_middle_and_close_in_the_tails():

@@ -125,15 +125,15 @@ def p2_step(cache_dir: Path | None = None, compiler: str | None = None) -> Buffe
 
 
 def advance(heights: np.ndarray, positions: np.ndarray, samples: np.ndarray, levels: np.ndarray) -> None:
-    """One step of a block, in place: ``heights`` and ``positions`` C-contiguous ``(BLOCK, 5)`` (stream
-    by stream, CasADi's column-major ``(5, BLOCK)``), ``samples`` ``(BLOCK,)``, ``levels`` ``(5,)``."""
+    """One step of a block, in place: ``heights`` and ``positions`` flat ``(5 BLOCK,)`` views of
+    C-contiguous ``(BLOCK, 5)`` arrays (stream by stream, CasADi's column-major ``(5, BLOCK)``),
+    ``samples`` ``(BLOCK,)``, ``levels`` ``(5,)``."""
     binding = p2_step().buffers()
     inputs, outputs = binding.flat_inputs, binding.flat_outputs
-    flat_heights, flat_positions = heights.reshape(-1), positions.reshape(-1)
-    inputs[0][:] = flat_heights
-    inputs[1][:] = flat_positions
+    inputs[0][:] = heights
+    inputs[1][:] = positions
     inputs[2][:] = samples
     inputs[3][:] = levels
     binding.evaluate()
-    flat_heights[:] = outputs[0]
-    flat_positions[:] = outputs[1]
+    heights[:] = outputs[0]
+    positions[:] = outputs[1]

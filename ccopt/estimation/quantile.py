@@ -171,6 +171,24 @@ class P2QuantileBank:
         self._positions = np.zeros((padded, N_MARKERS))
         self._samples = np.zeros(padded)
         self._levels = np.array(marker_levels(self.level))
+        self._blocks = self._block_views()
+
+    def _block_views(self) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """Per block, flat views of its heights and positions, and its samples (made once: slicing
+        and reshaping at every sample cost more than the copies)."""
+        return [
+            (self._heights[block].reshape(-1), self._positions[block].reshape(-1), self._samples[block])
+            for block in (slice(start, start + BLOCK) for start in range(0, len(self._samples), BLOCK))
+        ]
+
+    def __getstate__(self) -> dict[str, object]:
+        state = dict(self.__dict__)
+        del state["_blocks"]  # views would be unpickled as copies: made anew
+        return state
+
+    def __setstate__(self, state: dict[str, object]) -> None:
+        self.__dict__.update(state)
+        self._blocks = self._block_views()
 
     @property
     def count(self) -> int:
@@ -199,6 +217,5 @@ class P2QuantileBank:
                 self._heights.sort(axis=1)
                 self._positions[:] = np.arange(float(N_MARKERS))
             return
-        for start in range(0, len(self._samples), BLOCK):
-            block = slice(start, start + BLOCK)
-            advance(self._heights[block], self._positions[block], self._samples[block], self._levels)
+        for heights, positions, block_samples in self._blocks:
+            advance(heights, positions, block_samples, self._levels)
