@@ -533,27 +533,18 @@ class KinematicEstimator:
         return s * cos - d * sin, variance
 
     def _estimate(self, s_h_defined: bool, torque: float, fixed: bool) -> KinematicEstimate:
-        state, cov, valid_std = self._state, self._cov, self._valid_std
+        d, x_o, y_o, _, compliance, normal_compliance = self._state
+        cov, valid_std = self._cov, self._valid_std
         s_h, s_h_variance = self._hand_frame_s_h(torque)
         sqrt, nan, rough_std = math.sqrt, math.nan, self._rough_std
         var_d, var_x, var_y, var_c = cov[D][D], cov[X_O][X_O], cov[Y_O][Y_O], cov[C][C]
-        std = (  # sqrt(max(v, 0.0)), the max written out (a call costs more): NaN and -0.0 kept
-            sqrt(0.0 if var_d < 0.0 else var_d),
-            sqrt(0.0 if var_x < 0.0 else var_x),
-            sqrt(0.0 if var_y < 0.0 else var_y),
-            sqrt(0.0 if s_h_variance < 0.0 else s_h_variance),
-        )
-        d, x_o, y_o = state[D], state[X_O], state[Y_O]
+        # sqrt(max(v, 0.0)), the max written out (a call costs more): NaN and -0.0 kept
+        std_d, std_x = sqrt(0.0 if var_d < 0.0 else var_d), sqrt(0.0 if var_x < 0.0 else var_x)
+        std_y, std_s = sqrt(0.0 if var_y < 0.0 else var_y), sqrt(0.0 if s_h_variance < 0.0 else s_h_variance)
         if not s_h_defined:
             s_h = nan
-        rough = (
-            d if std[0] <= rough_std else nan,
-            x_o if std[1] <= rough_std else nan,
-            y_o if std[2] <= rough_std else nan,
-            s_h if std[3] <= rough_std else nan,
-        )
-        contact_valid = max(std[0], std[1], std[2]) <= valid_std
-        s_h_valid = s_h_defined and contact_valid and std[3] <= valid_std
+        contact_valid = max(std_d, std_x, std_y) <= valid_std
+        s_h_valid = s_h_defined and contact_valid and std_s <= valid_std
         return validation.trusted(  # every field, each well formed by construction
             KinematicEstimate,
             {
@@ -562,15 +553,20 @@ class KinematicEstimator:
                 "s_g": x_o if contact_valid else nan,
                 "d": d if contact_valid else nan,
                 "r_o": np.array((x_o, y_o) if contact_valid else (nan, nan)),
-                "std": std,
+                "std": (std_d, std_x, std_y, std_s),
                 "theta_o_valid": self._theta_o_valid,
                 "s_h_valid": s_h_valid,
                 "contact_valid": contact_valid,
-                "rough": rough,
+                "rough": (
+                    d if std_d <= rough_std else nan,
+                    x_o if std_x <= rough_std else nan,
+                    y_o if std_y <= rough_std else nan,
+                    s_h if std_s <= rough_std else nan,
+                ),
                 "theta_std": self._theta_std if self._theta_o_valid else nan,
-                "compliance": state[C],
+                "compliance": compliance,
                 "compliance_std": sqrt(0.0 if var_c < 0.0 else var_c),
-                "normal_compliance": state[K],
+                "normal_compliance": normal_compliance,
                 "resets": self.resets,
                 "anchor": self.anchor,
                 "ground_fixed": fixed,
