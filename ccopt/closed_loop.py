@@ -673,7 +673,6 @@ class _Loop:
         )
         self.target = np.array(self.plant.target(), dtype=float)
         self.velocity = np.zeros(3)
-        self._hand_frame = np.eye(3)  # geometry.planar_hand_to_world of the last control tick
         self.timestep = self.plant.timestep
         self.now = self.plant.time
         """The plant's time after its last step, s."""
@@ -787,19 +786,11 @@ class _Loop:
         tracker.fresh = False
         output = self.controller.update(control_input(estimate, hand_pose, coordinates, aim), tracker.command)
         self.last_solution = (output.solution.slack, output.solution.feasible)
-        self.velocity = self._world_velocity(float(hand_pose[2]), output.step)
+        step = geometry.twist_hand_to_world(float(hand_pose[2]), output.step)
+        self.velocity = step / self.controller.period
         self._check_solved(not output.solved)
         if self.on_tick is not None:
             self.on_tick(self.now, tracker.index, len(self.schedule.steps))
-
-    def _world_velocity(self, theta_h: float, step: np.ndarray) -> np.ndarray:
-        """The world velocity of the target (m/s, rad/s) that makes the hand-frame ``step`` (m, m, rad)
-        over a control period at hand angle ``theta_h`` (rad): :func:`geometry.twist_hand_to_world`'s
-        product, with its matrix (:func:`geometry.planar_hand_to_world`) filled in place."""
-        (nx, ny), (tx, ty) = geometry.hand_axes(theta_h)
-        frame = self._hand_frame
-        frame[0, 0], frame[0, 1], frame[1, 0], frame[1, 1] = nx, tx, ny, ty
-        return np.dot(frame, step) / self.controller.period
 
     def _check_solved(self, failed: bool) -> None:
         """End the run (``error``) once the QP solver has given no finite step for ``solver_grace``:

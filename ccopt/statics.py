@@ -220,13 +220,13 @@ _INPUT_SIZES = (_N_PARAMETERS, N_CONE_ROWS, _N_UNKNOWNS, _N_ROWS, _N_ROWS, _N_UN
 
 
 def build_answer_checks() -> ca.Function:
-    """``(x, rows, keep, lba, uba, lbx, ubx) → (honest, ok)``: what the LP's answer is worth.
+    """``(x, rows, keep, lba, uba, lbx, ubx) → (margin, ok)``: what the LP's answer is worth.
 
     DAQP's proximal iterations can stop with a kept row short of the margin ``t`` by a few hundredths
     of a newton (~0.3 % of random configurations): the wrench is sound, only its margin is not, and
-    calling it infeasible would rule out a possible motion. ``honest`` (1 or 0): the least slack
-    ``s_j + t`` of the kept rows is below ``t``, and the answer is taken at that margin (its rows'
-    slack at it). ``ok``: that answer is finite and meets every bound to within
+    calling it infeasible would rule out a possible motion. ``margin``: ``t``, or the least slack
+    ``s_j + t`` of the kept rows where that is below ``t`` (the answer is then taken at that margin,
+    its rows' slack at it). ``ok``: that answer is finite and meets every bound to within
     :data:`_FEASIBILITY_TOLERANCE`; else the LP was infeasible.
     """
     x, rows, keep = ca.SX.sym("x", _N_UNKNOWNS), ca.SX.sym("rows", _N_ROWS), ca.SX.sym("keep", N_CONE_ROWS)
@@ -250,7 +250,7 @@ def build_answer_checks() -> ca.Function:
     )
     ok = functools.reduce(ca.logic_and, tests)
     inputs, names = [x, rows, keep, lba, uba, lbx, ubx], ["x", "rows", "keep", "lba", "uba", "lbx", "ubx"]
-    return ca.Function("statics_lp_checks", inputs, [ca.vertcat(honest, ok)], names, ["checks"])
+    return ca.Function("statics_lp_checks", inputs, [ca.vertcat(answer[3], ok)], names, ["checks"])
 
 
 @functools.cache
@@ -319,15 +319,9 @@ class _Problem:
     limits), and their solve."""
 
     def __init__(
-        self,
-        head: list[float],
-        keep: list[float],
-        lba: list[float],
-        uba: list[float],
-        force_limits: tuple[float, float],
+        self, head: list[float], lba: list[float], uba: list[float], force_limits: tuple[float, float]
     ) -> None:
-        self.head, self.keep, self.lba, self.uba = head, keep, lba, uba
-        self.kept = [row for row, k in enumerate(keep) if k > 0.0]
+        self.head, self.lba, self.uba = head, lba, uba
         self.lower_force, self.upper_force = force_limits
 
     @classmethod
@@ -350,7 +344,7 @@ class _Problem:
         for row in modes.REMOVED_ROWS[motion]:
             lba[row] = uba[row] = -beyond
         theta_o, s_h = configuration
-        return cls([*parameters(statics, theta_o, s_h, l_h), *keep], keep, lba, uba, force_limits)
+        return cls([*parameters(statics, theta_o, s_h, l_h), *keep], lba, uba, force_limits)
 
     def solve(self, objective: tuple[float, ...], least_margin: float, nominal_force: float) -> StaticsResult:
         """The LP minimising ``objective`` with a margin of at least ``least_margin`` and the normal
@@ -362,10 +356,9 @@ class _Problem:
         binding.flat_inputs[0][:] = [*self.head, *objective, *lba, *self.uba, *lbx, *ubx]
         binding.evaluate()
         solution = binding.flat_outputs[0].tolist()
-        x, rows, (honest, ok) = solution[:_N_UNKNOWNS], solution[_N_UNKNOWNS:-2], solution[-2:]
+        x, (margin, ok) = solution[:_N_UNKNOWNS], solution[-2:]
         if not ok:
             return StaticsResult(-math.inf, None)
-        margin = min([rows[row] + self.keep[row] * x[3] for row in self.kept]) if honest else x[3]
         return StaticsResult(margin, np.array(x[:3]))
 
 

@@ -216,25 +216,25 @@ def test_bad_statics_raise():
         statics.ObjectStatics(0.5, np.eye(3), np.zeros(2), 0.1, statics.GravityMoment(0.0, 0.0))
 
 
-def _answer_checks(x, rows, keep, lba=None, uba=None, lbx=None, ubx=None) -> tuple[bool, bool]:
-    """``(honest, ok)`` of :func:`statics.build_answer_checks` on an LP answer (unbounded by default)."""
+def _answer_checks(x, rows, keep, lba=None, uba=None, lbx=None, ubx=None) -> tuple[float, bool]:
+    """``(margin, ok)`` of :func:`statics.build_answer_checks` on an LP answer (unbounded by default)."""
     n_rows, n_x = len(rows), len(x)
     lba = [-math.inf] * n_rows if lba is None else lba
     uba = [math.inf] * n_rows if uba is None else uba
     lbx = [-math.inf] * n_x if lbx is None else lbx
     ubx = [math.inf] * n_x if ubx is None else ubx
-    honest, ok = np.array(statics.build_answer_checks()(x, rows, keep, lba, uba, lbx, ubx)).ravel()
-    return bool(honest), bool(ok)
+    margin, ok = np.array(statics.build_answer_checks()(x, rows, keep, lba, uba, lbx, ubx)).ravel()
+    return float(margin), bool(ok)
 
 
 def test_the_answer_checks_lower_an_overstated_margin_and_refuse_what_misses_its_bounds():
     keep = [1.0, 1.0, 0.0, 0.0, 0.0, 0.0]
     x = [10.0, 1.0, 0.0, 2.0, 0.0]  # margin t = 2 N; a row is its slack less k_j t
     rows = [0.5, 1.0, 7.0, 7.0, 7.0, 7.0, 0.0, 0.0, 0.0]  # the kept rows' slack 2.5 and 3 N: at least t
-    assert _answer_checks(x, rows, keep) == (False, True)
+    assert _answer_checks(x, rows, keep) == (2.0, True)
     short = [-2.5, *rows[1:]]  # row 0's slack −0.5 N: the margin is −0.5 N, the row 0 there
     cone_lower = [0.0] * 6 + [-math.inf] * 3
-    assert _answer_checks(x, short, keep, lba=cone_lower) == (True, True)
+    assert _answer_checks(x, short, keep, lba=cone_lower) == (-0.5, True)
     assert not _answer_checks(x, [*short[:2], -0.1, *short[3:]], keep, lba=cone_lower)[1]  # a free row below
     assert not _answer_checks([10.0, 1.0, 0.0, math.nan, 0.0], rows, keep)[1]
     assert not _answer_checks(x, rows, keep, ubx=[9.0, *[math.inf] * 4])[1]

@@ -6,8 +6,8 @@ m/rad) and hand wrench ``(f_n, f_t, τ)`` (hand frame, N and N·m, :mod:`ccopt.g
 1. the hand friction estimate (:mod:`.friction`) and the ground friction hull (:mod:`.ground_cone`),
    fed while the hand is in contact (``f_n > contact_force``);
 2. the generalized friction cone ``N w ≤ b`` in the hand frame (:data:`ccopt.contact.cone_rows`,
-   written out in floats: the same operations as its CasADi expression, so the same values, at a
-   fraction of a call's overhead) and its margins ``b − N w``;
+   evaluated once per sample through one flat buffer, the same function as
+   :func:`ccopt.contact.friction_cone` at a fraction of its call overhead) and its margins ``b − N w``;
 3. the mode classifier (:mod:`.classifier`) on those margins: the conservative reported modes, and the
    most likely ones (a tighter hand friction margin) for the kinematics;
 4. the kinematic estimator (:mod:`.kinematics`) under the most likely modes, except for ground-slide
@@ -32,15 +32,16 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-import struct
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from numbers import Real
 
+import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ccopt import geometry, validation
+from ccopt import contact, geometry, validation
+from ccopt.casadi_eval import BufferedFunction
 from ccopt.contact import N_CONE_ROWS
 from ccopt.estimation.angle_filter import AngleFilter, AngleFilterParams
 from ccopt.estimation.classifier import ModeClassifier, ModeParams
@@ -56,8 +57,17 @@ from ccopt.modes import ContactConfiguration, ContactMode, HandGeometry
 _FLUSH = HandGeometry.FLUSH
 
 
-_CONE_VALUES = struct.Struct(f"{(3 + 1 + 1) * N_CONE_ROWS}d")
-"""``(N (row by row), b, b − N w)`` of a cone as bytes: one read-only array of them, three views."""
+def _flat_cone_rows() -> BufferedFunction:
+    """:data:`ccopt.contact.cone_rows` and the margins ``b − N w`` on one flat input
+    ``(θ_h, μ_h, l_h, vec(A) (column-major), b, w)`` with one flat output ``(N row by row, b, b − N w)``,
+    for :meth:`BufferedFunction.call_flat`."""
+    flat = ca.SX.sym("cone_input", 12)
+    n_rows, b = contact.cone_rows(flat[0], flat[1], flat[2], ca.reshape(flat[3:7], 2, 2), flat[7:9])
+    output = ca.vertcat(ca.vec(n_rows.T), b, b - n_rows @ flat[9:12])
+    return BufferedFunction(ca.Function("cone_rows_flat", [flat], [output]))
+
+
+_CONE_ROWS = _flat_cone_rows()
 SAMPLE_BOUNDS = (1e9, 1e3, 1e3, 1e3, 1e4, 1e4, 1e3)
 """Largest magnitudes of a sample's ``(time (s), x_h, y_h (m), θ_h (rad), f_n, f_t (N), τ (N·m))``:
 far beyond any run (hand within metres, forces within tens of N), yet small enough that no product
@@ -230,7 +240,7 @@ class Estimator:
         self.gravity = GravityEstimator(self.params.gravity)
         self.ground_slides = SlideEvidence(self.params.slid_distance)
         self.hand_slides = SlideEvidence(self.params.slid_distance)
-        self._ground_values = (math.nan,) * 6  # A (row by row) and b of self._cone_ground
+        self._cone_input = np.zeros(12)
         self._contact_force = self.params.contact_force
         self._theta_noise = self.params.theta_filter.noise
         self._last_reports: tuple = (None,) * 5  # (likely, commanded, unobservable, ground, reports)
@@ -277,7 +287,7 @@ class Estimator:
             self.ground.update(time, geometry.hand_to_world(axes, f_n, f_t))
         ground = self.ground.cone
         mu_h, lever = friction.mu_h, friction.l_h_eff
-        cone, margins = self._cone(axes, mu_h, lever, ground, f_n, f_t, torque)
+        cone, margins = self._cone(theta_h, mu_h, lever, ground, wrench)
         valid, row_valid = _ROW_VALID[friction.valid, ground.valid]
         modes = self.classifier.update(time, margins, valid)
         likely = self.kinematic_classifier.update(time, margins, valid)
@@ -355,47 +365,22 @@ class Estimator:
         return (theta, s_h, x_o, d), (theta_std, std_s, std_x, std_d)
 
     def _cone(
-        self,
-        axes: geometry.Axes,
-        mu_h: float,
-        l_h: float,
-        ground: GroundCone,
-        f_n: float,
-        f_t: float,
-        torque: float,
+        self, theta_h: float, mu_h: float, l_h: float, ground: GroundCone, wrench: np.ndarray
     ) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray], list[float]]:
-        """Read-only ``(N (6×3), b (6), b − N w (6))`` of :data:`ccopt.contact.cone_rows` (hand frame)
-        at the hand ``axes`` and the wrench ``w = (f_n, f_t, τ)``, and the margins as floats.
-
-        Written out: the operations of the CasADi expression of ``cone_rows`` and ``b − N w``, in its
-        order (constant factors folded, ``0 − x`` as ``−x``), so the values are the same floats,
-        signed zeros too (``tests/test_estimator.py`` checks them against the CasADi function)."""
+        """Read-only ``(N (6×3), b (6), b − N w (6))`` of :data:`ccopt.contact.cone_rows` (hand frame),
+        and the margins as floats."""
+        flat = self._cone_input
+        flat[0], flat[1], flat[2] = theta_h, mu_h, l_h
         if ground is not self._cone_ground:  # the ground rows change only when refitted
+            flat[3:7] = ground.A.ravel(order="F")
+            flat[7:9] = ground.b
             self._cone_ground = ground
-            self._ground_values = (*ground.A.ravel().tolist(), *ground.b.tolist())
-        a00, a01, a10, a11, b0, b1 = self._ground_values
-        (sin, _), (cos, _) = axes
-        n40, n41 = a00 * sin - a01 * cos, a00 * cos + a01 * sin  # ground rows: A (e_n, e_t)
-        n50, n51 = a10 * sin - a11 * cos, a10 * cos + a11 * sin
-        margins = [
-            mu_h * f_n + f_t,
-            -(f_t - mu_h * f_n),
-            l_h * f_n + torque,
-            -(torque - l_h * f_n),
-            b0 - (n40 * f_n + n41 * f_t),
-            b1 - (n50 * f_n + n51 * f_t),
-        ]
-        values = np.frombuffer(  # read-only
-            _CONE_VALUES.pack(
-                *(-mu_h, -1.0, 0.0, -mu_h, 1.0, 0.0, -l_h, 0.0, -1.0, -l_h, 0.0, 1.0),  # N, row by row
-                *(n40, n41, 0.0, n50, n51, 0.0),
-                *(0.0, 0.0, 0.0, 0.0, b0, b1),  # b
-                *margins,
-            )
-        )
+        flat[9:12] = wrench
+        out = _CONE_ROWS.call_flat(flat)
+        out.flags.writeable = False
         rows = 3 * N_CONE_ROWS
-        bounds = values[rows : rows + N_CONE_ROWS]
-        return (values[:rows].reshape(N_CONE_ROWS, 3), bounds, values[rows + N_CONE_ROWS :]), margins
+        margins = out[rows + N_CONE_ROWS :]
+        return (out[:rows].reshape(N_CONE_ROWS, 3), out[rows : rows + N_CONE_ROWS], margins), margins.tolist()
 
     def _slid(
         self,
