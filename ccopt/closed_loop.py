@@ -901,6 +901,7 @@ def _sample(plant, measurement, estimate, target, tracker, slack, feasible) -> d
         "est_d": np.float64(estimate.d),
         "est_kinematics_valid": np.bool_(estimate.kinematics_valid),
         "est_mu_h": np.float64(estimate.mu_h),
+        "est_face": np.array(estimate.face),
         "est_ground_rows": estimate.ground_rows,
         "est_ground_bounds": estimate.ground_bounds,
         "est_modes": np.array([estimate.hand_mode, estimate.hand_geometry, estimate.ground_mode], np.int8),

@@ -88,9 +88,25 @@ def _build_ground_rows_world() -> ca.Function:
     return ca.Function("ground_rows_world", [mu_g, f_grav], [a, b], ["mu_g", "f_grav"], ["A", "b"])
 
 
+def _build_patch_torque_rows() -> ca.Function:
+    l_h, s_h, face = _sym("l_h"), _sym("s_h"), _sym("face", 2)
+    low = ca.fmax(-l_h, face[0] + s_h)
+    high = ca.fmin(l_h, face[1] + s_h)
+    rows = ca.vertcat(ca.horzcat(-high, 0, -1), ca.horzcat(low, 0, 1))
+    return ca.Function("patch_torque_rows", [l_h, s_h, face], [rows], ["l_h", "s_h", "face"], ["N"])
+
+
 hand_rows = _build_hand_rows()
 """``(μ_h, l_h) → (N (4×3), b (4))``: hand friction and torque rows in the hand frame, rows
 ``HAND_SLIDE_POS … HAND_PIVOT_NEG``."""
+
+patch_torque_rows = _build_patch_torque_rows()
+"""``(l_h, s_h, face (2)) → N (2×3)``: the torque rows ``HAND_PIVOT_POS, HAND_PIVOT_NEG`` (bounds 0)
+of a contact patch that is the hand ``[−l_h, l_h]`` cut to the object's face, whose points lie at
+``face = (u_low, u_high)`` from the ground contact's foot (m, :func:`ccopt.geometry.face_position`):
+the centre of pressure ``c = −τ/f_n`` within ``[max(−l_h, u_low + s_h), min(l_h, u_high + s_h)]``.
+An unbounded face (``±inf``) gives :data:`hand_rows`' torque rows; a hand past the face's end has
+a patch shorter than the hand, and a hand off the face an empty one (no wrench satisfies both)."""
 
 ground_rows_world = _build_ground_rows_world()
 """``(μ_g, f_grav (2)) → (A (2×2), b (2))``: the model's ground rows ``A f_h ≤ b`` on the world hand
@@ -189,6 +205,7 @@ pose with respect to ``θ_o, s_h, s_g``, in the hand frame ``(n, t, θ)``."""
 
 CONTACT_FUNCTIONS: tuple[ca.Function, ...] = (
     hand_rows,
+    patch_torque_rows,
     ground_rows_world,
     cone_rows,
     complementarity_lhs,

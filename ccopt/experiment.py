@@ -67,6 +67,7 @@ RECORD_UNITS = {
     "est_d": "estimated d (ground contact to hand face along e_n): m",
     "est_kinematics_valid": "bool: the kinematics are estimated",
     "est_mu_h": "estimated hand friction coefficient (NaN: not yet)",
+    "est_face": "known face (u_low, u_high): m along e_t from the ground contact's foot (NaN: not yet)",
     "est_ground_rows": "estimated ground cone rows A (2×2), world hand force (f_x, f_y): A f ≤ b",
     "est_ground_bounds": "estimated ground cone bounds b (2): N",
     "est_modes": "estimated (hand slide, hand pivot, ground slide): −1/0/+1, 0 sticking",

@@ -21,6 +21,13 @@ Kinematics (paper eqs. 14–16)
     ``r_h = r_o − s_h e_t − d e_n`` while the hand is flush (``θ_o = θ_h``), with ``r_o = (x_o, y_o)``
     the ground contact, ``s_g = x_o``, ``s_h = (r_o − r_h)·e_t`` and ``d = (r_o − r_h)·e_n``.
 
+Centre of pressure and positions on the face
+    A hand wrench acts at ``c e_t`` from the hand face's centre, ``c = −τ/f_n`` (a push ``f_n e_n`` at
+    ``c e_t`` has the moment ``τ = −c f_n`` about the centre): :func:`centre_of_pressure`. A point of
+    the object's face at hand position ``c`` lies ``u = c − s_h`` along ``e_t`` from the foot of the
+    ground contact on the face's line; ``u`` is fixed in the object while the hand slides and the
+    object turns (:func:`face_position`).
+
 In MuJoCo the plane is x–z: ``(x, y)_ccopt = (x, z)_mujoco``; hinge joints use axis ``(0, -1, 0)``
 so that ``qpos`` equals the CCW planar angle.
 """
@@ -168,6 +175,17 @@ def contact_coordinates(hand_pose: ArrayLike, r_o: ArrayLike) -> tuple[float, fl
     rel = np.asarray(r_o, dtype=float) - pose[:2]
     theta_h = pose.item(2)
     return float(rel @ hand_tangent(theta_h)), float(rel @ hand_normal(theta_h))
+
+
+def centre_of_pressure(f_n: float, torque: float) -> float:
+    """Where the hand wrench acts along ``e_t`` from the hand face's centre, ``c = −τ/f_n`` (m; N, N·m)."""
+    return -torque / f_n
+
+
+def face_position(hand_position: float, s_h: float) -> float:
+    """The position ``u = c − s_h`` (m) along ``e_t``, from the ground contact's foot on the face's
+    line, of the face point at hand position ``c`` (m) (module docstring)."""
+    return hand_position - s_h
 
 
 def ground_contact(hand_pose: ArrayLike, s_h: ArrayLike, d: ArrayLike) -> Array:

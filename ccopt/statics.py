@@ -36,6 +36,7 @@ solve; a cvxpy + Clarabel twin checks it in the tests.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import itertools
 import math
@@ -59,11 +60,14 @@ MIN_MARGIN = 0.3
 """Margin (N) every kept row needs for a configuration to count as held, by default."""
 
 _TORQUE_ROWS = (Row.HAND_PIVOT_POS, Row.HAND_PIVOT_NEG)
-_N_PARAMETERS = 12  # θ_o, s_h, d, M, μ_h, l_h, vec(A) (4, column-major), b (2)
+_N_PARAMETERS = 14  # θ_o, s_h, d, M, μ_h, l_h, vec(A) (4, column-major), b (2), face (2)
 _N_ROWS = N_CONE_ROWS + 3  # cone rows, moment balance, |f_n − f_nom| ≤ u
 _N_UNKNOWNS = 5  # f_n, f_t, τ, t, u
 _BIG = 1e6
 """Bound on ``|f_t|``, ``|τ|`` and ``|t|`` of the LP (N, N·m): far beyond any wrench considered."""
+_FACE_FAR = 1e3
+"""The face's ends are clipped to ``±`` this (m) for the LP: an unbounded face cuts nothing from the
+hand, an empty one ``(inf, −inf)`` leaves an empty patch, and the LP's matrix stays finite."""
 LP_PROXIMAL_WEIGHT = 1e-6
 """DAQP's proximal-point weight, which lets its QP method solve an LP (no Hessian). The answers agree
 with Clarabel's to ~2e-6 N over random configurations (a test holds the two against each other).
@@ -98,6 +102,10 @@ class GravityMoment:
         return cls(-weight * com_along, weight * com_height)
 
 
+WHOLE_HAND = (-math.inf, math.inf)
+"""A face that covers the whole hand, wherever it is (:attr:`ObjectStatics.face`)."""
+
+
 @dataclass(frozen=True)
 class ObjectStatics:
     """What the statics need to know of the object, true or estimated (SI units).
@@ -112,6 +120,11 @@ class ObjectStatics:
         ground_known: per ground row, whether it is known (an estimate's row fitted to a friction
             face; a conservative row at the extent of the data is not): unknown rows bind nothing,
             and a slide whose boundary is unknown cannot be judged (its margin is NaN).
+        face: ``(u_low, u_high)``, where the hand's face of the object is (known) to be, m along
+            ``e_t`` from the ground contact's foot (:func:`ccopt.geometry.face_position`); the hand's
+            contact patch is the hand cut to it (:data:`ccopt.contact.patch_torque_rows`). Unbounded
+            by default: the whole hand is on the face; empty (``u_low > u_high``): no wrench is known
+            to be held, every margin is negative.
     """
 
     mu_h: float
@@ -120,6 +133,7 @@ class ObjectStatics:
     d: float
     gravity: GravityMoment
     ground_known: tuple[bool, bool] = (True, True)
+    face: tuple[float, float] = WHOLE_HAND
 
     def __post_init__(self) -> None:
         rows = np.array(self.ground_rows, dtype=float)
@@ -132,6 +146,10 @@ class ObjectStatics:
             raise ValueError("object statics must be finite")
         if self.mu_h < 0.0:
             raise ValueError(f"mu_h must be non-negative, got {self.mu_h!r}")
+        face = tuple(float(end) for end in self.face)
+        if len(face) != 2 or any(map(math.isnan, face)):
+            raise ValueError(f"face must be two numbers (m, ±inf allowed), got {self.face!r}")
+        object.__setattr__(self, "face", face)
         rows.flags.writeable = False
         bounds.flags.writeable = False
         object.__setattr__(self, "ground_rows", rows)
@@ -168,20 +186,22 @@ class StaticsResult:
 def build_statics_lp() -> ca.Function:
     """``(p, keep, g, lba, uba, lbx, ubx) → (x, rows)``: the LPs of the module docstring, by DAQP.
 
-    ``p = (θ_o, s_h, d, M, μ_h, l_h, vec(A), b)``; ``x = (f_n, f_t, τ, t, u)``; the objective is
+    ``p = (θ_o, s_h, d, M, μ_h, l_h, vec(A), b, face)``; ``x = (f_n, f_t, τ, t, u)``; the objective is
     ``gᵀx`` (minimised). The rows are the six cone rows ``s_j (b_j − n_jᵀw) − k_j t`` (``s_j = 1/l_h``
-    on torque rows, ``k_j = 1`` on kept rows), the moment balance, and ``u − f_n``, ``u + f_n`` (so
+    on torque rows, ``k_j = 1`` on kept rows; the torque rows those of the hand cut to the face,
+    :data:`ccopt.contact.patch_torque_rows`), the moment balance, and ``u − f_n``, ``u + f_n`` (so
     that ``u ≥ |f_n − f_nom|`` with ``−f_nom``, ``f_nom`` as their lower bounds); ``lba``/``uba`` (9)
     select kept (``[0, ∞)``), removed (``[0, 0]``) and ignored rows, and the moment balance is
     ``[0, 0]``; ``f_n`` is bounded by the force limits and ``t`` by a required margin through ``lbx``.
     """
     p = ca.SX.sym("p", _N_PARAMETERS)
     theta, s_h, d, moment, mu_h, l_h = (p[i] for i in range(6))
-    ground_a, ground_b = ca.reshape(p[6:10], 2, 2), p[10:12]
+    ground_a, ground_b, face = ca.reshape(p[6:10], 2, 2), p[10:12], p[12:14]
     keep = ca.SX.sym("keep", N_CONE_ROWS)
     x = ca.SX.sym("x", _N_UNKNOWNS)
     wrench, margin, spread = x[:3], x[3], x[4]
     rows, bounds = contact.cone_rows(theta, mu_h, l_h, ground_a, ground_b)
+    rows[_TORQUE_ROWS[0] : _TORQUE_ROWS[1] + 1, :] = contact.patch_torque_rows(l_h, s_h, face)
     scale = ca.vertcat(1, 1, 1 / l_h, 1 / l_h, 1, 1)
     slack = scale * (bounds - rows @ wrench) - keep * margin
     hand_pose = contact.hand_pose_kinematics(theta, s_h, 0.0, d, 0.0)
@@ -302,6 +322,7 @@ def parameters(statics: ObjectStatics, theta_o: float, s_h: float, l_h: float) -
         l_h,
         *statics.ground_rows.ravel(order="F").tolist(),
         *statics.ground_bounds.tolist(),
+        *(min(max(end, -_FACE_FAR), _FACE_FAR) for end in statics.face),
     ]
 
 
@@ -435,7 +456,7 @@ def true_statics(obj: PlanarObject, start: StartConfig, hand: Hand) -> TrueConfi
     r_o = np.array([start.x_o, 0.0])
     _, d = geometry.contact_coordinates(hand_pose, r_o)
     com = object_pose[:2] - r_o
-    statics = ObjectStatics.of_model(
+    model = ObjectStatics.of_model(
         obj.mu_hand,
         obj.mu_ground,
         obj.mass,
@@ -443,7 +464,9 @@ def true_statics(obj: PlanarObject, start: StartConfig, hand: Hand) -> TrueConfi
         com_along=float(com @ geometry.hand_tangent(start.theta_o)),
         com_height=float(-(com @ geometry.hand_normal(start.theta_o))),
     )
-    low, high = face_s_h_range(obj, start)
+    low, high = face_s_h_range(obj, start)  # the hand's centre on the face's ends
+    face = (geometry.face_position(0.0, high), geometry.face_position(0.0, low))
+    statics = dataclasses.replace(model, face=face)
     s_h_range = (low + hand.half_length, high - hand.half_length)
     return TrueConfiguration(statics, start.theta_o, start.s_h, s_h_range)
 

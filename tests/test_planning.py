@@ -259,9 +259,12 @@ def plan_setup(
 ) -> Setup:
     """The graph of ``plan_tour``'s docstring at ``s_h``: the true statics, ``θ_o`` within the reach and
     the vertex range less 5°, the hand on the face, the estimate's torque lever, the share of the
-    force range."""
+    force range, the patch cut to the face under the hand at the start (the estimate's margin in)."""
     start = dataclasses.replace(params.start, s_h=s_h)
     truth = statics.true_statics(obj, start, params.hand)
+    half, inset = params.hand.half_length, params.estimator_params.face.margin
+    known = dataclasses.replace(truth.statics, face=(-half - s_h + inset, half - s_h - inset))
+    truth = dataclasses.replace(truth, statics=known)
     tilt_low, tilt_high = vertex_range(obj, dataclasses.replace(start, s_h=0.0))
     theta_range = (max(angle_range[0], tilt_low + CLEARANCE), min(angle_range[1], tilt_high - CLEARANCE))
     lever = params.estimator_params.friction.torque_margin * params.hand.half_length

@@ -1,6 +1,7 @@
 """The statics LP (ccopt.statics) against closed forms, a second solver (cvxpy + Clarabel) and itself
 mirrored; the oracle on a known object."""
 
+import dataclasses
 import itertools
 import math
 from concurrent.futures import ThreadPoolExecutor
@@ -29,11 +30,13 @@ class Flat(NamedTuple):
     com_along: float = 0.0
     com_height: float = 0.077
     l_h: float = 0.05
+    face: tuple[float, float] = statics.WHOLE_HAND
 
     def margin(self, motion: Motion) -> statics.StaticsResult:
         known = statics.ObjectStatics.of_model(
             self.mu_hand, self.mu_ground, self.mass, self.d, self.com_along, self.com_height
         )
+        known = dataclasses.replace(known, face=self.face)
         return statics.best_wrench(known, self.theta_o, self.s_h, motion, self.l_h, (F_MIN, F_MAX))
 
 
@@ -143,6 +146,9 @@ def test_mirror_symmetry_of_the_slides():
 def clarabel_margin(p: Flat, motion: Motion) -> float:
     """The same LP written independently in cvxpy (hand wrench and ground force, full equilibrium)."""
     rows, bounds = contact.model_friction_cone(p.theta_o, p.mu_hand, p.mu_ground, p.l_h, p.mass)
+    # the patch: the centre of pressure −τ/f_n between the hand's and the face's ends nearer its centre
+    low, high = max(-p.l_h, p.face[0] + p.s_h), min(p.l_h, p.face[1] + p.s_h)
+    rows[2:4] = [[-high, 0.0, -1.0], [low, 0.0, 1.0]]
     scale = np.array([1.0, 1.0, 1.0 / p.l_h, 1.0 / p.l_h, 1.0, 1.0])
     rows, bounds = rows * scale[:, None], bounds * scale
     wrench, ground, margin = cp.Variable(3), cp.Variable(2), cp.Variable()
@@ -184,6 +190,41 @@ def test_daqp_agrees_with_clarabel_on_random_configurations():
         )
         motion = list(Motion)[int(rng.integers(len(Motion)))]
         assert p.margin(motion).margin == pytest.approx(clarabel_margin(p, motion), abs=2e-5), (p, motion)
+
+
+def test_a_face_shorter_than_the_hand_cuts_the_patch_as_clarabel_does():
+    """Random faces whose ends fall inside the hand (or leave it empty): DAQP on the cut torque rows of
+    :data:`ccopt.contact.patch_torque_rows` against the centre-of-pressure bounds written here."""
+    rng = np.random.default_rng(11)
+    cut = 0
+    for _ in range(60):
+        l_h, s_h = rng.uniform(0.02, 0.05), rng.uniform(-0.04, 0.04)
+        low = rng.uniform(-l_h, 0.5 * l_h) - s_h
+        p = Flat(
+            mu_hand=rng.uniform(0.1, 1.0),
+            mass=rng.uniform(0.1, 1.0),
+            d=rng.uniform(0.03, 0.15),
+            theta_o=rng.uniform(-0.7, 0.8),
+            s_h=s_h,
+            com_along=rng.uniform(-0.05, 0.05),
+            l_h=l_h,
+            face=(low, low + rng.uniform(0.005, 2.0 * l_h)),
+        )
+        motion = list(Motion)[int(rng.integers(len(Motion)))]
+        ours, theirs = p.margin(motion).margin, clarabel_margin(p, motion)
+        assert ours == pytest.approx(theirs, abs=2e-5), (p, motion)
+        cut += ours < p._replace(face=statics.WHOLE_HAND).margin(motion).margin - 1e-3
+    assert cut >= 20  # the faces bind in most cases
+
+
+def test_an_empty_face_holds_nothing_and_one_beyond_the_hand_cuts_nothing():
+    """An empty face is a patch whose torque rows cannot both hold: every margin is negative, by
+    ``f_n`` times the gap over ``l_h`` at least (an unknown face, ``(inf, −inf)``, by far more)."""
+    p = Flat(theta_o=0.3, s_h=0.01)
+    for motion in Motion:
+        assert p._replace(face=(0.01, -0.01)).margin(motion).margin <= -0.5 * F_MIN * 0.02 / p.l_h
+        assert p._replace(face=(math.inf, -math.inf)).margin(motion).margin < -1e3
+        assert p._replace(face=(-1.0, 1.0)).margin(motion).margin == p.margin(motion).margin
 
 
 def test_the_best_wrench_holds_the_object():

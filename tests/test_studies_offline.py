@@ -5,6 +5,7 @@ import json
 import numpy as np
 import pytest
 
+from ccopt import contact
 from ccopt.modes import Motion
 from studies import feasibility, gradients, qp_region
 from studies.__main__ import main as studies_main
@@ -30,7 +31,7 @@ def test_gradient_study_meets_its_tolerances(tmp_path):
     assert gradients.main(argv) == 0
     summary = json.loads((tmp_path / "results.json").read_text())["summary"]
     contact_names = [name for name in summary if name != "qp"]
-    assert len(contact_names) == 7
+    assert len(contact_names) == len(contact.CONTACT_FUNCTIONS)
     for name in contact_names:
         assert summary[name]["max_rel"] <= gradients.CONTACT_TOLERANCE == 1e-6, name
     assert summary["qp"]["points"] >= 6

@@ -77,7 +77,9 @@ def estimated_statics(
     known (``Estimate.friction_faces``: a side the ground slid past, and the other side its mirror
     image); an unknown side is only where the sticking forces seen end, which bounds nothing a
     sticking motion may do. The row a ground slide of ``motion`` crosses, when unknown, is the
-    exception: its hull estimate, inside the true face, is where that slide is sought.
+    exception: its hull estimate, inside the true face, is where that slide is sought. The hand's
+    contact patch is cut to the part of the face known (``Estimate.face``; the whole hand where an
+    estimate has none).
     """
     values = (estimate.d, estimate.s_h, estimate.mu_h, *estimate.wrench)
     if not (estimate.kinematics_valid and all(map(math.isfinite, values))):
@@ -94,7 +96,8 @@ def estimated_statics(
     if not all(map(math.isfinite, (*rows.ravel().tolist(), *bounds.tolist()))):
         return None
     friction = estimate.mu_h if mu_h is None else mu_h
-    return statics.ObjectStatics(friction, rows, bounds, estimate.d, gravity, tuple(known))
+    face = estimate.face if not math.isnan(estimate.face[0]) else statics.WHOLE_HAND
+    return statics.ObjectStatics(friction, rows, bounds, estimate.d, gravity, tuple(known), face)
 
 
 def _gravity(estimate: Estimate, hand_angle: float) -> statics.GravityMoment:

@@ -4,6 +4,7 @@ wrench and pose alone. :class:`Estimator` is the entry point; the modules are it
 from ccopt.estimation.angle_filter import AngleFilter, AngleFilterParams
 from ccopt.estimation.classifier import ModeClassifier, ModeParams
 from ccopt.estimation.estimator import Estimate, Estimator, EstimatorParams, commanded_modes, replay
+from ccopt.estimation.face import FaceEstimator, FaceParams
 from ccopt.estimation.friction import HandFrictionEstimator, HandFrictionParams
 from ccopt.estimation.gravity import GravityEstimate, GravityEstimator, GravityParams
 from ccopt.estimation.ground_cone import GroundCone, GroundConeEstimator, GroundConeParams
@@ -16,6 +17,8 @@ __all__ = [
     "Estimate",
     "Estimator",
     "EstimatorParams",
+    "FaceEstimator",
+    "FaceParams",
     "GravityEstimate",
     "GravityEstimator",
     "GravityParams",

@@ -19,7 +19,9 @@ m/rad) and hand wrench ``(f_n, f_t, τ)`` (hand frame, N and N·m, :mod:`ccopt.g
    constant-rate Kalman filter (:mod:`.angle_filter`), which averages the angle noise without
    lagging a pivot;
 6. the weight's moment about the ground contact, ``M(θ_o)`` (:mod:`.gravity`), from the samples the
-   kinematics regressed on a fixed ground contact.
+   kinematics regressed on a fixed ground contact;
+7. where the face under the hand is known to be (:mod:`.face`): the hand's extent at the start and
+   the centres of pressure seen since.
 
 Samples with a non-finite pose or wrench (sensor dropouts), or a value beyond what any run of this
 robot can produce (:data:`SAMPLE_BOUNDS`: a glitch, not a measurement), change nothing: the previous
@@ -45,6 +47,7 @@ from ccopt.casadi_eval import BufferedFunction
 from ccopt.contact import N_CONE_ROWS
 from ccopt.estimation.angle_filter import AngleFilter, AngleFilterParams
 from ccopt.estimation.classifier import ModeClassifier, ModeParams
+from ccopt.estimation.face import UNKNOWN_FACE, FaceEstimator, FaceParams
 from ccopt.estimation.friction import HandFrictionEstimator, HandFrictionParams
 from ccopt.estimation.gravity import UNKNOWN as UNKNOWN_GRAVITY
 from ccopt.estimation.gravity import GravityEstimate, GravityEstimator, GravityParams
@@ -55,6 +58,7 @@ from ccopt.hand import Hand
 from ccopt.modes import ContactConfiguration, ContactMode, HandGeometry
 
 _FLUSH = HandGeometry.FLUSH
+_STICK = ContactMode.STICK
 
 
 def _flat_cone_rows() -> BufferedFunction:
@@ -104,6 +108,7 @@ class EstimatorParams:
     kinematics: KinematicsParams = field(default_factory=KinematicsParams)
     gravity: GravityParams = field(default_factory=GravityParams)
     theta_filter: AngleFilterParams = field(default_factory=AngleFilterParams)
+    face: FaceParams = field(default_factory=FaceParams)
     contact_force: float = 1.0
     slid_distance: float = 2e-3
 
@@ -116,6 +121,7 @@ class EstimatorParams:
             ("kinematics", KinematicsParams),
             ("gravity", GravityParams),
             ("theta_filter", AngleFilterParams),
+            ("face", FaceParams),
         )
         validation.check_types((name, getattr(self, name), kind) for name, kind in parts)
         check_number("contact_force", self.contact_force, low_open=False)
@@ -166,6 +172,9 @@ class Estimate:
         ground_anchor: changes whenever the ground contact may have moved (the kinematics'
             ``anchor``: a reset, a ground motion followed); estimates with the same value share one
             ground contact, so ``s_g`` differences between them are the ground's own slides.
+        face: ``(u_low, u_high)``, where the face under the hand is known to be, m along ``e_t``
+            from the ground contact's foot (:mod:`.face`): NaN while the kinematics are not valid,
+            empty (``u_low > u_high``) where nothing shows it yet.
     """
 
     time: float
@@ -200,6 +209,7 @@ class Estimate:
     gravity: GravityEstimate = UNKNOWN_GRAVITY
     hand_slid: bool = False
     ground_anchor: int = 0
+    face: tuple[float, float] = UNKNOWN_FACE
 
     @property
     def friction_faces(self) -> tuple[np.ndarray, np.ndarray, tuple[bool, bool]]:
@@ -238,6 +248,7 @@ class Estimator:
         self.kinematics = KinematicEstimator(self.hand.half_length, self.params.kinematics)
         self.theta_filter = AngleFilter(self.params.theta_filter)
         self.gravity = GravityEstimator(self.params.gravity)
+        self.face = FaceEstimator(self.hand.half_length, self.params.face)
         self.ground_slides = SlideEvidence(self.params.slid_distance)
         self.hand_slides = SlideEvidence(self.params.slid_distance)
         self._cone_input = np.zeros(12)
@@ -305,6 +316,10 @@ class Estimator:
         )
         slid = self._slid(commanded, kinematics, theta_h, both)
         hand_slid = self.hand_slides.slid
+        valid = kinematics.theta_o_valid and kinematics.s_h_valid and kinematics.contact_valid
+        flush = in_contact and likely.hand_geometry == _FLUSH
+        sliding = commanded is not None and commanded.hand_mode != _STICK
+        face = self.face.update(valid, kinematics.s_h, kinematics.d, flush, f_n, torque, sliding)
         self._last = _assemble(
             time,
             np.frombuffer(wrench.tobytes()),  # a read-only copy
@@ -322,6 +337,7 @@ class Estimator:
             gravity,
             slid,
             hand_slid[0] or hand_slid[1],
+            face,
         )
         return self._last
 
@@ -629,6 +645,7 @@ def _assemble(
     gravity: GravityEstimate,
     slid: tuple[bool, bool],
     hand_slid: bool,
+    face: tuple[float, float] = UNKNOWN_FACE,
 ) -> Estimate:
     """An :class:`Estimate` from its parts (the arrays read-only); ``rough`` is ``(kinematics_mean,
     kinematics_std)``, ``slid`` the ways the ground was seen sliding."""
@@ -669,6 +686,7 @@ def _assemble(
             "gravity": gravity,
             "hand_slid": hand_slid,
             "ground_anchor": kinematics.anchor,
+            "face": face,
         },
     )
 

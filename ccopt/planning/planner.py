@@ -23,7 +23,8 @@ experimenter's oracle (:func:`oracle_plan`).
 Coordinates: ``θ_o`` (rad) and ``s_h`` (m) as the estimator reports them; ``s_g`` (m) relative to the
 ground contact at the run's start (``s_g_origin``). The planner never leaves ``reach`` (the robot's
 hand angles, which are the flush face's) nor the band of ``s_h`` between the start and the goal
-widened by :attr:`PlannerParams.s_h_span` (the estimator does not know where the face ends).
+widened by :attr:`PlannerParams.s_h_span`; within it, the statics cut the hand's contact patch to the
+part of the face the estimate knows (``ObjectStatics.face``, :mod:`ccopt.estimation.face`).
 """
 
 from __future__ import annotations
@@ -128,7 +129,8 @@ def next_motion(
     ``lever`` is the torque rows' lever (m) and ``force_limits`` the normal force range (N) the
     statics are judged with; ``reach`` the ``θ_o`` range (rad) the robot may take the object to;
     ``face`` the range of ``s_h`` (m) over which the hand lies on the face, where known (the
-    experimenter's oracle; the estimator does not know where the face ends); ``failed_slides``
+    experimenter's oracle: the whole hand on the face; the estimate's statics know only a part of
+    it, :attr:`ccopt.statics.ObjectStatics.face`); ``failed_slides``
     the tilts ``θ_o`` (rad) at which a ground slide each way (``+1``, ``-1``) was tried and did not
     start: a slide towards ``±s_g`` is then sought only at tilts at least half a pivot step beyond,
     further that way (tilting the hand's normal towards the slide is what lets the hand push the

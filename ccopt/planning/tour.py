@@ -191,6 +191,14 @@ def vertex_range(
     return ends[0], ends[1]
 
 
+def _start_face(s_h: float, params: LoopParams) -> tuple[float, float]:
+    """The face a run started at ``s_h`` (m) knows from its start: under the whole hand, the
+    estimate's margin inside (:class:`ccopt.estimation.face.FaceParams`), m from the ground contact's
+    foot."""
+    half, margin = params.hand.half_length, params.estimator_params.face.margin
+    return geometry.face_position(-half, s_h) + margin, geometry.face_position(half, s_h) - margin
+
+
 def plan_tour(
     obj: PlanarObject,
     params: LoopParams,
@@ -209,7 +217,9 @@ def plan_tour(
     (rad); the object's own vertex range and ``5°`` of clearance narrow it. Every step (and the
     start) keeps ``margin`` (N) with a normal force within ``force_share`` of the hand's range and
     the estimate's torque lever: headroom for what the statics ignore (the contacts' compliance, the
-    dynamics). Uses the true object: never for the estimator or the controller."""
+    dynamics); the hand's contact patch is cut to the part of the face the run knows, under the hand
+    at the start (:mod:`ccopt.estimation.face`; the run knows no more unless the centre of pressure
+    goes there). Uses the true object: never for the estimator or the controller."""
     if not (math.isfinite(margin) and margin >= 0.0):
         raise ValueError(f"margin must be a non-negative number of N, got {margin!r}")
     if not 0.0 < force_share <= 1.0:
@@ -238,7 +248,8 @@ def plan_tour(
         truth = statics.true_statics(obj, start, params.hand)
         graph_params = GraphParams(s_h_range=truth.s_h_range, theta_range=theta_range, min_margin=margin)
         where = (truth.theta_o, truth.s_h)
-        graph = ConfigurationGraph(truth.statics, where, lever, forces, graph_params)
+        known = dataclasses.replace(truth.statics, face=_start_face(start.s_h, params))
+        graph = ConfigurationGraph(known, where, lever, forces, graph_params)
         if graph.margin(Node(0, 0), Motion.HOLD) < margin:
             continue  # the run could not even hold its start comfortably
         tour = possible_tour(graph, **tour_options)

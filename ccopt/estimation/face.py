@@ -1,0 +1,151 @@
+"""Where the object's face under the hand is known to be: the part of it the hand has pressed on.
+
+The estimator does not know where the face touching the hand ends, and a statics judged with the
+whole hand as the contact patch (``|τ| ≤ l_h f_n``) allows wrenches whose centre of pressure lies
+past the face's end: the object then turns about that end instead of doing what was commanded (on a
+goals-study quadrilateral, a hand slide back from 13 mm past the start asked for its centre of
+pressure 12 mm beyond the face and the object rolled 4° under the hand, unseen). The face is fixed
+in the object, so its points are fixed positions ``u`` along ``e_t`` from the ground contact's foot
+(:func:`ccopt.geometry.face_position`), whatever the hand's slide and the object's tilt.
+
+Two kinds of evidence tell where the face is, conservatively (the interval lies inside the face):
+
+* **the start**: a run starts with the hand flush on the face over its whole length (the plant
+  places it so, DESIGN §1): where the kinematics become valid before the hand is first commanded to
+  slide, the face covers ``[−l_h − ŝ_h, l_h − ŝ_h]``, with ``ŝ_h`` the latest estimate before that
+  first slide (the hand has not moved on the face until then, and the estimate only improves);
+* **the centre of pressure**: every sample with the hand flush, pressing with at least
+  ``min_normal_force`` and the kinematics valid has its centre of pressure ``c = −τ/f_n`` on the
+  face, at ``u = c − ŝ_h``.
+
+The interval reported is their hull shrunk by ``margin`` at each end (the error of ``ŝ_h``) and each
+centre of pressure also by ``torque_noise / f_n`` (the torque's noise). While the kinematics are lost
+the face is not reported. When they are found again with the same ``d̂`` (within ``same_vertex``),
+the object is on the same vertex (another vertex at the same distance from the face would need the
+object to have tipped over the edge between them, through lying flat) and the face is known as it
+was. With another ``d̂`` the object rolled onto another vertex, under the same face: if the hand was
+not commanded to slide meanwhile, the face is where it was on the hand (``u`` moves by the change of
+``ŝ_h``); else it is forgotten, and from then on only centres of pressure tell it.
+
+Only commanded slides count: the classifier reports the hand sliding whenever its friction is not
+yet estimated, which is most of the start. A replay without commands takes the hand as never
+commanded to slide, so its start evidence follows ``ŝ_h`` through any slide: there the face is
+only as good as the recording's hand slides are few.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ccopt import geometry
+from ccopt.validation import check_number
+
+UNKNOWN_FACE = (math.nan, math.nan)
+"""The face while the kinematics are not valid: not estimated."""
+NO_FACE = (math.inf, -math.inf)
+"""The face while the kinematics are valid but nothing shows where it is (an empty interval)."""
+
+
+@dataclass(frozen=True)
+class FaceParams:
+    """Parameters of the face estimate (m, N, N·m).
+
+    Attributes:
+        start_on_face: the run starts with the whole hand on the face (module docstring).
+        margin: each end of the known face is taken this far inside the evidence (m).
+        min_normal_force: centres of pressure count at this normal force or above (N).
+        torque_noise: a centre of pressure is taken ``torque_noise / f_n`` inside where it was
+            measured (N·m; about twice the default sensors' torque noise).
+        same_vertex: kinematics found again with ``d̂`` within this (m) of the last are on the same
+            ground contact.
+    """
+
+    start_on_face: bool = True
+    margin: float = 3e-3
+    min_normal_force: float = 3.0
+    torque_noise: float = 0.01
+    same_vertex: float = 3e-3
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.start_on_face, bool):
+            raise TypeError(f"start_on_face must be a bool, got {self.start_on_face!r}")
+        check_number("margin", self.margin, low_open=False)
+        check_number("min_normal_force", self.min_normal_force)
+        check_number("torque_noise", self.torque_noise, low_open=False)
+        check_number("same_vertex", self.same_vertex, low_open=False)
+
+
+class FaceEstimator:
+    """The known part of the face (module docstring).
+
+    Args:
+        half_length: ``l_h``, half the length of the hand's contact face (m).
+        params: estimator parameters.
+    """
+
+    def __init__(self, half_length: float, params: FaceParams | None = None) -> None:
+        self.half_length = check_number("half_length", half_length)
+        self.params = params if params is not None else FaceParams()
+        self.face = UNKNOWN_FACE
+        """``(u_low, u_high)`` (m): :data:`UNKNOWN_FACE` while the kinematics are not valid; empty
+        (``u_low > u_high``) where too little is known (:data:`NO_FACE`, or a centre of pressure or
+        two)."""
+        self._low, self._high = NO_FACE  # the hull of the evidence but the start's
+        self._start = NO_FACE  # the start's evidence
+        self._at_start = self.params.start_on_face  # the hand lies where the run started it
+        self._valid = False
+        self._d = self._s_h = math.nan  # d̂ and ŝ_h when the kinematics were last valid
+        self._hand_slid = False  # the hand was commanded to slide since they were
+
+    def update(
+        self,
+        valid: bool,
+        s_h: float,
+        d: float,
+        flush: bool,
+        f_n: float,
+        torque: float,
+        hand_slides: bool,
+    ) -> tuple[float, float]:
+        """One sample: whether the kinematics are ``valid``, ``ŝ_h`` and ``d̂`` (m), whether the hand
+        is ``flush``, the wrench's ``f_n`` (N) and ``τ`` (N·m), whether the hand is commanded to
+        slide. Returns :attr:`face`."""
+        if hand_slides:  # the face under the hand moves: the start's evidence is as last estimated
+            self._at_start = False
+            self._hand_slid = not valid
+        if not valid:
+            if self._valid:  # lost: the hand may have slid unseen, the start's evidence stays
+                self._valid, self._at_start, self.face = False, False, UNKNOWN_FACE
+            return self.face
+        if not self._valid:
+            self._found(s_h, d)
+        self._d, self._s_h = d, s_h
+        changed = False
+        if self._at_start:
+            self._start, changed = (-self.half_length - s_h, self.half_length - s_h), True
+        if flush and f_n >= self.params.min_normal_force:
+            u = geometry.face_position(geometry.centre_of_pressure(f_n, torque), s_h)
+            noise = self.params.torque_noise / f_n
+            if u + noise < self._low or u - noise > self._high:
+                self._low, self._high, changed = min(u + noise, self._low), max(u - noise, self._high), True
+        if changed:
+            self._report()
+        return self.face
+
+    def _found(self, s_h: float, d: float) -> None:
+        """The kinematics became valid (module docstring)."""
+        self._valid = True
+        if not abs(d - self._d) <= self.params.same_vertex:  # another vertex (or the first)
+            shift = self._s_h - s_h
+            keep = not self._hand_slid and math.isfinite(shift)
+            self._low, self._high = (self._low + shift, self._high + shift) if keep else NO_FACE
+            self._start = (self._start[0] + shift, self._start[1] + shift) if keep else NO_FACE
+        self._hand_slid = False
+        self._report()
+
+    def _report(self) -> None:
+        """The face from the evidence: its hull, ``margin`` inside."""
+        low, high = min(self._low, self._start[0]), max(self._high, self._start[1])
+        margin = self.params.margin
+        self.face = (low + margin, high - margin) if low <= high else NO_FACE
