@@ -15,7 +15,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(PY) -m ccopt.cli run --object paper-triangle --schedule paper --plant planar --seed 0 --out runs/demo
+	$(PY) -m ccopt.cli run --object paper-triangle --schedule paper --plant planar --seed 0 --out runs/demo --overwrite
 
 test: $(STAMP)
 	$(PY) -m ruff check .

@@ -695,9 +695,8 @@ class _Loop:
         self.message = ""
 
     def _sequencer(self, index: int, goal: Goal, now: float) -> GoalSequencer:
-        planner = PlannerParams(slide_beyond=self.goal.push)
         return GoalSequencer(
-            index, goal, now, self.plant.hand_angle_range, self.goal, planner, self.tilt_limits
+            index, goal, now, self.plant.hand_angle_range, self.goal, PlannerParams(), self.tilt_limits
         )
 
     def run(self) -> RunResult:

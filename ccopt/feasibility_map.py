@@ -134,20 +134,17 @@ def margins(
     s_hs: np.ndarray,
     lever: float,
     forces: tuple[float, float],
-    slide_beyond: float = 0.0,
 ) -> np.ndarray:
     """Margins (k, n, m) of :data:`MOTIONS` over the grid, ``statics_of(motion)`` giving the statics
-    each motion is judged on (None: NaN everywhere); ground slides judged ``slide_beyond`` (N) past
-    their row, as the planner judges them (:attr:`ccopt.planning.graph.GraphParams.slide_beyond`)."""
+    each motion is judged on (None: NaN everywhere)."""
     out = np.full((len(MOTIONS), len(thetas), len(s_hs)), math.nan)
     for k, motion in enumerate(MOTIONS):
         known = statics_of(motion)
         if known is None:
             continue
-        beyond = slide_beyond if motion in (Motion.SLIDE_GROUND_POS, Motion.SLIDE_GROUND_NEG) else 0.0
         for i, theta in enumerate(thetas):
             for j, s_h in enumerate(s_hs):
-                out[k, i, j] = statics.best_wrench(known, theta, s_h, motion, lever, forces, beyond).margin
+                out[k, i, j] = statics.best_wrench(known, theta, s_h, motion, lever, forces).margin
     return out
 
 
@@ -167,8 +164,9 @@ def of_run(
     true on ``obj`` as ``start`` placed it, over ``theta_range`` (the robot's reach, rad) and
     ``s_h`` around the estimate's (or the start's); ``lever`` (m) and ``forces`` (N) as the planner
     judges. ``vertex_range`` is where the object stays on its start vertex (rad;
-    :func:`ccopt.planning.tour.vertex_range`); the estimated ground slides are judged
-    ``slide_beyond`` (N) past their row, as the run's planner judged them."""
+    :func:`ccopt.planning.tour.vertex_range`); an estimated ground slide whose friction face is not
+    known is sought ``slide_beyond`` (N) past the sticking forces seen, as the run's planner sought
+    it (:func:`ccopt.control.targets.estimated_statics`)."""
     truth = statics.true_statics(obj, start, hand)
     usable = estimate is not None and estimate.kinematics_valid
     centre = float(estimate.s_h) if usable else truth.s_h
@@ -176,12 +174,11 @@ def of_run(
     if usable:
         angle = float(estimate.theta_o)
         estimated = margins(
-            lambda motion: estimated_statics(estimate, angle, motion=motion),
+            lambda motion: estimated_statics(estimate, angle, motion=motion, push=slide_beyond),
             thetas,
             s_hs,
             lever,
             forces,
-            slide_beyond,
         )
         at = (angle, centre)
     else:

@@ -353,7 +353,6 @@ class _Problem:
         motion: Motion,
         l_h: float,
         force_limits: tuple[float, float],
-        beyond: float,
     ) -> _Problem | None:
         """The LPs of ``motion`` at ``configuration`` ``(θ_o, s_h)`` (:func:`best_wrench`'s arguments);
         None where a row the motion removes is unknown."""
@@ -361,9 +360,7 @@ class _Problem:
         if rows_of is None:
             return None
         keep, lba, uba = rows_of
-        lba, uba = lba[:-2], uba.copy()  # the |f_n − f_nom| rows' lower bounds are set per solve
-        for row in modes.REMOVED_ROWS[motion]:
-            lba[row] = uba[row] = -beyond
+        lba = lba[:-2]  # the |f_n − f_nom| rows' lower bounds are set per solve
         theta_o, s_h = configuration
         return cls([*parameters(statics, theta_o, s_h, l_h), *keep], lba, uba, force_limits)
 
@@ -390,15 +387,13 @@ def best_wrench(
     motion: Motion | str,
     l_h: float,
     force_limits: tuple[float, float],
-    beyond: float = 0.0,
 ) -> StaticsResult:
     """The largest margin (N) of ``motion`` at ``(θ_o, s_h)`` (rad, m) and the hand wrench achieving it.
 
     ``l_h`` is the torque rows' lever (m; the hand's half-length, or its estimate's effective one)
-    and ``force_limits`` the normal force's ``(f_min, f_max)`` (N); ``beyond`` as in
-    :func:`regulation_wrench`.
+    and ``force_limits`` the normal force's ``(f_min, f_max)`` (N).
     """
-    problem = _Problem.of(statics, (theta_o, s_h), Motion(motion), l_h, force_limits, beyond)
+    problem = _Problem.of(statics, (theta_o, s_h), Motion(motion), l_h, force_limits)
     if problem is None:
         return StaticsResult(math.nan, None)
     return problem.solve(_MAXIMISE_MARGIN, -_BIG, 0.0)
@@ -413,18 +408,15 @@ def regulation_wrench(
     force_limits: tuple[float, float],
     nominal_force: float,
     margin_goal: float,
-    beyond: float = 0.0,
 ) -> StaticsResult:
     """The wrench a controller should hold for ``motion`` at ``(θ_o, s_h)``: the normal force nearest
     ``nominal_force`` (N) among the wrenches whose margin is at least ``min(best, margin_goal)`` (N).
 
     The largest margin alone presses as hard as the limits allow (every row grows with ``f_n``);
     this keeps the margin the motion needs and no more force than that. The result's ``margin`` is
-    the margin required (``-inf`` where the motion is impossible at any force). With ``beyond``
-    (N), the contact a slide moves is put that far past its row rather than on it: for a row
-    estimated inside the true one, the wrench that still slides it.
+    the margin required (``-inf`` where the motion is impossible at any force).
     """
-    problem = _Problem.of(statics, (theta_o, s_h), Motion(motion), l_h, force_limits, beyond)
+    problem = _Problem.of(statics, (theta_o, s_h), Motion(motion), l_h, force_limits)
     if problem is None:
         return StaticsResult(math.nan, None)
     best = problem.solve(_MAXIMISE_MARGIN, -_BIG, 0.0)

@@ -489,9 +489,9 @@ def test_margins_are_cached(monkeypatch: pytest.MonkeyPatch) -> None:
     calls: list[tuple[float, float, Motion]] = []
     solve = statics.best_wrench
 
-    def counted(known, theta, s_h, motion, lever, forces, beyond=0.0):  # type: ignore[no-untyped-def]
+    def counted(known, theta, s_h, motion, lever, forces):  # type: ignore[no-untyped-def]
         calls.append((theta, s_h, Motion(motion)))
-        return solve(known, theta, s_h, motion, lever, forces, beyond)
+        return solve(known, theta, s_h, motion, lever, forces)
 
     monkeypatch.setattr(statics, "best_wrench", counted)
     first = [setup.graph.margin(Node(0, 0), motion) for motion in MOTIONS]

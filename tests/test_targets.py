@@ -187,6 +187,22 @@ def test_ground_rows_are_known_where_fitted_and_where_a_ground_slide_crosses(mot
     assert (known.mu_h, known.d) == (OBJECT.mu_h, OBJECT.d)
 
 
+@pytest.mark.parametrize("fitted", FITTED_CASES)
+@pytest.mark.parametrize("motion", list(CROSSED), ids=lambda m: m.value)
+def test_a_slide_is_sought_past_the_forces_seen_only_across_a_side_not_known(motion, fitted):
+    """With ``push``, the row a ground slide crosses moves ``push`` N out where it is the hull of the
+    sticking forces (no side fitted: a wrench on it need not slide the object), and stays where it is
+    a friction face (fitted, or the mirror of one): the slide's limit itself (pushed past it, a
+    random square's second slide at 38° tilted its wrench onto the hand's torque limit)."""
+    estimate = known_estimate(OBJECT, THETA_O, S_H, fitted=fitted)
+    push, side = 1.5, CROSSED[motion]
+    known = estimated_statics(estimate, THETA_O, motion=motion, push=push)
+    expected = OBJECT.ground_bounds.copy()
+    if not any(fitted):
+        expected[side] += push
+    np.testing.assert_array_equal(known.ground_bounds, expected)
+
+
 def test_the_hand_friction_is_the_estimates_unless_given():
     estimate = known_estimate(OBJECT, THETA_O, S_H, mu_h=0.35)
     assert estimated_statics(estimate, THETA_O).mu_h == 0.35

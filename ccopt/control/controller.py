@@ -116,9 +116,12 @@ class ControllerParams:
         friction_step: how far beyond ``μ̂_h`` (the largest friction ratio the hand was seen to
             hold) a motion may explore the hand friction where ``μ̂_h`` leaves it short of its
             margin (:mod:`ccopt.control.targets`); 0 never explores.
-        slide_beyond: how far past its estimated row the statics target puts a ground slide's
-            wrench (N): that row is a face of the forces seen, about a newton inside the true
-            face (median 0.9 N on a closed-loop tour of the paper triangle).
+        slide_beyond: how far past the sticking forces seen the statics target puts a ground
+            slide's wrench where the ground's friction face that way is not known (N): the hull's
+            row there is a face of the forces seen, about a newton inside the true face (median
+            0.9 N on a closed-loop tour of the paper triangle). On a friction face the ground slid
+            past, pushing past it tilted the wrench onto the hand's torque limit (a random
+            square's second slide at 38° judged −2.5 N instead of +6.4 N).
         infeasible_margin: a step whose estimated statics margin is below ``−infeasible_margin`` (N)
             when it starts is not forced: it ends ``infeasible`` with the reason.
         length_unit, angle_unit, force_unit: the units in which the QP weighs its terms and its

@@ -67,7 +67,11 @@ UNJUDGED = StaticsTarget(None, None, math.nan)
 
 
 def estimated_statics(
-    estimate: Estimate, hand_angle: float, mu_h: float | None = None, motion: Motion | None = None
+    estimate: Estimate,
+    hand_angle: float,
+    mu_h: float | None = None,
+    motion: Motion | None = None,
+    push: float = 0.0,
 ) -> statics.ObjectStatics | None:
     """The object's statics as the estimate knows them (None before the kinematics are known), with
     the hand friction ``mu_h`` instead of ``μ̂_h`` if given.
@@ -77,7 +81,9 @@ def estimated_statics(
     known (``Estimate.friction_faces``: a side the ground slid past, and the other side its mirror
     image); an unknown side is only where the sticking forces seen end, which bounds nothing a
     sticking motion may do. The row a ground slide of ``motion`` crosses, when unknown, is the
-    exception: its hull estimate, inside the true face, is where that slide is sought. The hand's
+    exception: its hull estimate, inside the true face, moved out by ``push`` (N), is where that
+    slide is sought (a wrench on the hull's row need not slide the object). A friction face the
+    ground slid past is the slide's limit itself, and is not moved. The hand's
     contact patch is cut to the part of the face known (``Estimate.face``; the whole hand where an
     estimate has none).
     """
@@ -91,7 +97,7 @@ def estimated_statics(
     for row in REMOVED_ROWS[motion] if motion is not None else ():
         side = GROUND_ROWS.index(row) if row in GROUND_ROWS else None
         if side is not None and not known[side]:  # the crossed row from the hull
-            rows[side], bounds[side] = estimate.ground_rows[side], estimate.ground_bounds[side]
+            rows[side], bounds[side] = estimate.ground_rows[side], estimate.ground_bounds[side] + push
             known[side] = True
     if not all(map(math.isfinite, (*rows.ravel().tolist(), *bounds.tolist()))):
         return None
@@ -120,10 +126,11 @@ class TargetGoal:
         nominal_force: the normal force preferred where the statics leave a choice (N).
         margin: the margin the regulation wrench keeps where it can (N).
         friction_step: how far beyond ``μ̂_h`` the hand friction may be explored (module docstring).
-        push: how far past its estimated row a ground slide's wrench is put (N): the row is a face
-            of the forces seen, inside the true one (:func:`ccopt.statics.regulation_wrench`'s
-            ``beyond``), so the wrench on it need not slide the object; put past it, the normal
-            force is chosen so that the hand still keeps its margin while pushing there.
+        push: how far past the sticking forces seen a ground slide is sought where its friction
+            face is not known (N, :func:`estimated_statics`): the hull's row there is a face of the
+            forces seen, inside the true one, so a wrench on it need not slide the object; put past
+            it, the normal force is chosen so that the hand still keeps its margin while pushing
+            there. A friction face the ground slid past is the limit itself: no push.
         headroom: the force target stays this far (N) below ``f_max``; the motion is still judged
             on the whole range (:attr:`ccopt.control.controller.ControllerParams.force_headroom`).
     """
@@ -139,7 +146,8 @@ class TargetGoal:
 def statics_target(estimate: Estimate, hand_angle: float, motion: Motion, goal: TargetGoal) -> StaticsTarget:
     """The regulation wrench and margin of ``motion`` on the estimated statics, exploring the hand
     friction by ``goal.friction_step`` where ``μ̂_h`` falls short (see the module)."""
-    known = estimated_statics(estimate, hand_angle, motion=motion)
+    push = goal.push if modes.kind_of(motion) == "slide_ground" else 0.0
+    known = estimated_statics(estimate, hand_angle, motion=motion, push=push)
     target = _target(known, estimate, hand_angle, motion, goal)
     if not (goal.friction_step > 0.0 and target.judged and target.margin < goal.margin):
         return target
@@ -171,7 +179,6 @@ def _target(
         goal.force_limits,
         goal.nominal_force,
         goal.margin,
-        goal.push if modes.kind_of(motion) == "slide_ground" else 0.0,
     )
     if math.isnan(result.margin):
         return UNJUDGED

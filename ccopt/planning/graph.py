@@ -37,9 +37,6 @@ class GraphParams:
         theta_range: ``(θ_min, θ_max)`` the robot may take the object to.
         s_h_range: ``(s_h_min, s_h_max)`` over which the whole hand lies on the face.
         min_margin: margin every point of an edge needs.
-        slide_beyond: a ground slide is judged with its contact this far (N) past its row
-            (:func:`ccopt.statics.regulation_wrench`'s ``beyond``: an estimated row lies inside the
-            true one, and the controller pushes past it).
     """
 
     pivot_step: float = math.radians(7.2)
@@ -49,7 +46,6 @@ class GraphParams:
     theta_range: tuple[float, float] = (math.radians(-40.0), math.radians(50.0))
     s_h_range: tuple[float, float] = (-0.05, 0.05)
     min_margin: float = 1.0
-    slide_beyond: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("pivot_step", "s_h_step", "ground_slide"):
@@ -65,7 +61,6 @@ class GraphParams:
             raise ValueError(f"empty ranges: θ {self.theta_range}, s_h {self.s_h_range}")
 
 
-_GROUND_SLIDES = (Motion.SLIDE_GROUND_POS, Motion.SLIDE_GROUND_NEG)
 
 
 @dataclass(frozen=True, order=True)
@@ -152,8 +147,7 @@ class ConfigurationGraph:
         if key not in self._margins:
             theta, s_h = self.configuration(node)
             known = self.known(motion) if callable(self.known) else self.known
-            beyond = self.params.slide_beyond if motion in _GROUND_SLIDES else 0.0
-            result = statics.best_wrench(known, theta, s_h, motion, self.lever, self.force_limits, beyond)
+            result = statics.best_wrench(known, theta, s_h, motion, self.lever, self.force_limits)
             self._margins[key] = result.margin
         return self._margins[key]
 

@@ -64,8 +64,6 @@ class PlannerParams:
         ground_slide: a full ground slide (the paper's 10 mm).
         s_h_span: how far beyond the current and the goal's ``s_h`` a plan may take the hand.
         motion_timeout: the timeout of each planned motion, s.
-        slide_beyond: ground slides are judged this far (N) past their row, as the controller's
-            statics target puts them (:attr:`ccopt.control.controller.ControllerParams.slide_beyond`).
         aim: the share of a goal's tolerances the plan aims within: the estimate errs by up to a
             millimetre where the truth is (the ground contact after a slide, the run's start), and
             a goal is only reached if the truth is within the whole tolerance.
@@ -78,7 +76,6 @@ class PlannerParams:
     ground_slide: float = SLIDE_STEP
     s_h_span: float = 0.02
     motion_timeout: float = DEFAULT_TIMEOUT
-    slide_beyond: float = 0.0
     aim: float = 0.5
 
     def __post_init__(self) -> None:
@@ -173,7 +170,6 @@ def _graph(
         theta_range=(low, high),
         s_h_range=band,
         min_margin=params.margin,
-        slide_beyond=params.slide_beyond,
     )
     return ConfigurationGraph(statics_of, (theta, s_h), lever, force_limits, grid)
 

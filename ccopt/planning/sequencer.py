@@ -172,7 +172,7 @@ class GoalSequencer:
 
         def plan_with(mu_h: float | None) -> Plan:
             return next_motion(
-                _statics_of(estimate, mu_h),
+                _statics_of(estimate, mu_h, self.aim.push),
                 where,
                 self.goal,
                 s_g_origin,
@@ -211,15 +211,17 @@ def _usable(estimate: Estimate) -> bool:
     return bool(estimate.kinematics_valid) and all(map(math.isfinite, values))
 
 
-def _statics_of(estimate: Estimate, mu_h: float | None):
+def _statics_of(estimate: Estimate, mu_h: float | None, push: float):
     """The estimated statics per motion (at the current hand angle's gravity moment where no model
-    is estimated yet), with the hand friction ``mu_h`` if given."""
+    is estimated yet), with the hand friction ``mu_h`` if given and a ground slide sought ``push`` (N)
+    past the sticking forces seen where its friction face is not known
+    (:func:`ccopt.control.targets.estimated_statics`)."""
     cache: dict[Motion, ObjectStatics] = {}
     angle = float(estimate.theta_o)
 
     def statics_of(motion: Motion) -> ObjectStatics:
         if motion not in cache:
-            known = estimated_statics(estimate, angle, mu_h, motion)
+            known = estimated_statics(estimate, angle, mu_h, motion, push)
             if known is None:
                 raise ValueError("the estimate cannot judge the statics")
             cache[motion] = known
