@@ -477,6 +477,7 @@ def print_summary(summary: dict, folder: Path) -> None:
             (f"realised/commanded {kind} median [q25, q75] (n)", f"{spread(entry)} ({entry['n']})")
             for kind, entry in summary["ratio_by_kind"].items()
         ),
+        ("probes reached (not scored above)", f"{summary['probes']['reached']}/{summary['probes']['n']}"),
         ("normal force median / p99 / max (N)", " / ".join(stat(force[k], 1) for k in force)),
         ("unintended slips", str(summary["unintended_slips"])),
         ("steps the estimate ruled out", str(summary["infeasible_steps"])),

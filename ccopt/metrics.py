@@ -220,6 +220,7 @@ def summarize(
         "kinematics_valid_share": float(valid.mean()) if valid.size else 0.0,
         "ratio_realised_commanded": quartiles(ratios),
         "ratio_by_kind": ratio_by_kind(data, steps),
+        "probes": probes(steps),
         "normal_force_n": normal_force(data),
         "infeasible_steps": [int(step["index"]) for step in own if step.get("status") == "infeasible"],
         "unintended_slips": len(slips),
@@ -229,6 +230,16 @@ def summarize(
         "sim_time_s": float(sim_time),
         "wall_time_s": float(wall_time),
     }
+
+
+def probes(steps: Sequence[Mapping[str, object]]) -> dict[str, int]:
+    """The exploration steps that move something (``Step.explore``: the exploration's probes, and a
+    goal's motions that look for a limit, :mod:`ccopt.planning.sequencer`), which the ratios leave
+    out: ``n`` of them and how many were ``reached``."""
+    moving = [
+        step for step in steps if step.get("explore") and modes.driven_coordinate(step["kind"]) is not None
+    ]
+    return {"n": len(moving), "reached": sum(bool(step["reached"]) for step in moving)}
 
 
 def goal_scores(
@@ -279,6 +290,7 @@ def _unmeasured(
         "kinematics_valid_share": 0.0,
         "ratio_realised_commanded": quartiles(()),
         "ratio_by_kind": {kind: quartiles(()) for kind in modes.KINDS[1:]},
+        "probes": probes(()),
         "normal_force_n": normal_force({}),
         "infeasible_steps": [],
         "unintended_slips": 0,

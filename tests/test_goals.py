@@ -116,3 +116,20 @@ def test_the_goals_motions_keep_the_other_contacts_and_the_run_is_recorded(
     assert [goal["status"] for goal in summary["goals"]] == [goal["status"] for goal in run.summary["goals"]]
     meta = json.loads((folder / "meta.json").read_text())
     assert sum(step["motion"] == "reach" for step in meta["schedule"]["steps"]) == len(GOALS)
+
+
+def test_a_ground_slide_is_a_probe_until_the_ground_has_truly_slid(
+    run: experiment.Experiment, data: dict[str, np.ndarray]
+) -> None:
+    """A goal's ground slide towards a side whose friction face is not known probes for it (it is not
+    scored as a commanded motion): by truth, exactly those before the ground first slid (either way:
+    the other side's face is then the mirror image of the one seen)."""
+    slid = False
+    probes = []
+    for step in run.result.steps:
+        if step.kind == "slide_ground" and step.goal is not None:
+            probes.append(step.explore)
+            assert step.explore == (not slid), step
+        moved = truth_at(data, step.end_time)[2] - truth_at(data, step.start_time)[2]
+        slid = slid or abs(moved) >= 2e-3
+    assert probes[:1] == [True] and False in probes  # the first slide probes, a later one does not

@@ -12,6 +12,10 @@ answers, every time a motion ends, with the next motion or with how the goal end
   (:func:`ccopt.control.targets.estimated_statics`, per motion), from the estimated configuration;
   where that finds no sequence and the hand has not yet slid, again with the hand friction one
   step beyond ``μ̂_h`` (the estimate is a lower bound: the controller explores it on the way);
+* a motion that explores — on the hand friction one step beyond ``μ̂_h``, or a ground slide towards a
+  side whose friction face is not yet known (sought past the sticking forces seen) — is a probe
+  (``Step.explore``): it looks for a limit that may not be where it is sought, and its realised
+  change is not scored as a commanded motion's;
 * ``reached`` — every given coordinate is within its tolerance, by the estimate;
 * ``unreachable`` — no sequence reaches it under the estimate, with the planner's reason;
 * ``timeout`` — the goal's time ran out;
@@ -28,6 +32,7 @@ first became usable (the run's start, unless the ground slid before).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -163,7 +168,8 @@ class GoalSequencer:
         if plan.status == "unreachable":
             return self.end(now, "unreachable", plan.reason)
         self._last = (plan.motion, float(estimate.theta_o))
-        return self._take(plan.motion)
+        probe = plan.explores or _seeks_a_friction_face(plan.motion, estimate)
+        return self._take(dataclasses.replace(plan.motion, explore=True) if probe else plan.motion)
 
     def _plan(self, estimate: Estimate, s_g_origin: float) -> Plan:
         where = (float(estimate.theta_o), float(estimate.s_h), float(estimate.s_g))
@@ -204,6 +210,16 @@ class GoalSequencer:
     def end(self, now: float, status: str, reason: str = "") -> GoalResult:
         """The goal's result, ending now with ``status``."""
         return GoalResult(self.index, self.goal, self.start_time, now, status, reason, self.motions)
+
+
+def _seeks_a_friction_face(step: Step, estimate: Estimate) -> bool:
+    """Whether ``step`` is a ground slide towards a side whose friction face is not known: it is
+    sought past the sticking forces seen (:func:`ccopt.control.targets.estimated_statics`), where
+    the face may or may not be, so it probes the ground's friction."""
+    if step.kind != "slide_ground":
+        return False
+    _, _, known = estimate.friction_faces
+    return not known[0 if step.delta > 0.0 else 1]
 
 
 def _usable(estimate: Estimate) -> bool:
