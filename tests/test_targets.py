@@ -16,7 +16,14 @@ import pytest
 from ccopt import contact, geometry, objects, statics
 from ccopt.closed_loop import control_input, enforced_rows
 from ccopt.contact import Row
-from ccopt.control.targets import UNJUDGED, StaticsTarget, TargetGoal, estimated_statics, statics_target
+from ccopt.control.targets import (
+    UNJUDGED,
+    StaticsTarget,
+    TargetGoal,
+    estimated_statics,
+    seeks_friction,
+    statics_target,
+)
 from ccopt.estimation import Estimate, Estimator
 from ccopt.estimation.gravity import UNKNOWN as UNKNOWN_GRAVITY
 from ccopt.hand import Hand
@@ -201,6 +208,8 @@ def test_a_slide_is_sought_past_the_forces_seen_only_across_a_side_not_known(mot
     if not any(fitted):
         expected[side] += push
     np.testing.assert_array_equal(known.ground_bounds, expected)
+    assert seeks_friction(estimate, motion) == (not any(fitted))  # a probe of the ground's friction
+    assert not seeks_friction(estimate, Motion.PIVOT)
 
 
 def test_the_hand_friction_is_the_estimates_unless_given():

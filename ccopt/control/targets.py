@@ -94,16 +94,29 @@ def estimated_statics(
     faces, face_bounds, known_faces = estimate.friction_faces
     rows, bounds = np.array(faces), np.array(face_bounds)
     known = list(known_faces)
-    for row in REMOVED_ROWS[motion] if motion is not None else ():
-        side = GROUND_ROWS.index(row) if row in GROUND_ROWS else None
-        if side is not None and not known[side]:  # the crossed row from the hull
-            rows[side], bounds[side] = estimate.ground_rows[side], estimate.ground_bounds[side] + push
-            known[side] = True
+    side = _crossed_side(motion)
+    if side is not None and not known[side]:  # the crossed row from the hull
+        rows[side], bounds[side] = estimate.ground_rows[side], estimate.ground_bounds[side] + push
+        known[side] = True
     if not all(map(math.isfinite, (*rows.ravel().tolist(), *bounds.tolist()))):
         return None
     friction = estimate.mu_h if mu_h is None else mu_h
     face = estimate.face if not math.isnan(estimate.face[0]) else statics.WHOLE_HAND
     return statics.ObjectStatics(friction, rows, bounds, estimate.d, gravity, tuple(known), face)
+
+
+def _crossed_side(motion: Motion | None) -> int | None:
+    """The ground row (0 ``GROUND_SLIDE_POS``, 1 ``GROUND_SLIDE_NEG``) ``motion`` slides across, if any."""
+    rows = REMOVED_ROWS[motion] if motion is not None else ()
+    return next((GROUND_ROWS.index(row) for row in rows if row in GROUND_ROWS), None)
+
+
+def seeks_friction(estimate: Estimate, motion: Motion) -> bool:
+    """Whether ``motion`` is a ground slide across a side whose friction face the estimate does not
+    know: :func:`estimated_statics` seeks it past the sticking forces seen, where the face may not be
+    (a probe of the ground's friction)."""
+    side = _crossed_side(motion)
+    return side is not None and not estimate.friction_faces[2][side]
 
 
 def _gravity(estimate: Estimate, hand_angle: float) -> statics.GravityMoment:

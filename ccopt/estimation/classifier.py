@@ -99,11 +99,9 @@ class ModeClassifier:
         """
         values, until = self._values, self._until
         for contact, threshold, (pos, neg) in self._contacts:
-            # tight_direction, written out (every sample, for each contact of both classifiers)
-            if estimated[pos] and estimated[neg] and min(margins[pos], margins[neg]) > threshold:
-                if time >= until[contact]:  # nothing tight: a report is held for hold_time
-                    values[contact] = 0
-            else:
-                values[contact] = 1 if margins[pos] <= margins[neg] else -1
-                until[contact] = time + self._hold_time
+            raw = tight_direction(margins[pos], margins[neg], threshold, estimated[pos] and estimated[neg])
+            if raw:
+                values[contact], until[contact] = raw, time + self._hold_time
+            elif time >= until[contact]:  # nothing tight: a report is held for hold_time
+                values[contact] = 0
         return _CONFIGURATIONS[values[0], values[1], values[2]]

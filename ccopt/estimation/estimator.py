@@ -316,10 +316,10 @@ class Estimator:
         )
         slid = self._slid(commanded, kinematics, theta_h, both)
         hand_slid = self.hand_slides.slid
-        valid = kinematics.theta_o_valid and kinematics.s_h_valid and kinematics.contact_valid
+        known = kinematics.theta_o_valid and kinematics.s_h_valid and kinematics.contact_valid
         flush = in_contact and likely.hand_geometry == _FLUSH
         sliding = commanded is not None and commanded.hand_mode != _STICK
-        face = self.face.update(valid, kinematics.s_h, kinematics.d, flush, f_n, torque, sliding)
+        face = self.face.update(known, kinematics.s_h, kinematics.d, flush, f_n, torque, sliding)
         self._last = _assemble(
             time,
             np.frombuffer(wrench.tobytes()),  # a read-only copy

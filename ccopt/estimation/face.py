@@ -47,6 +47,19 @@ NO_FACE = (math.inf, -math.inf)
 """The face while the kinematics are valid but nothing shows where it is (an empty interval)."""
 
 
+def hand_extent(half_length: float, s_h: float) -> tuple[float, float]:
+    """Where the face points under the whole hand lie, ``(u_low, u_high)`` (m): the hand's ends
+    ``∓l_h`` at ``ŝ_h`` (:func:`ccopt.geometry.face_position`)."""
+    return geometry.face_position(-half_length, s_h), geometry.face_position(half_length, s_h)
+
+
+def inside(evidence: tuple[float, float], margin: float) -> tuple[float, float]:
+    """The known face from the evidence's hull ``(low, high)`` (m): ``margin`` (m) inside each end;
+    :data:`NO_FACE` where there is no hull."""
+    low, high = evidence
+    return (low + margin, high - margin) if low <= high else NO_FACE
+
+
 @dataclass(frozen=True)
 class FaceParams:
     """Parameters of the face estimate (m, N, N·m).
@@ -123,7 +136,7 @@ class FaceEstimator:
         self._d, self._s_h = d, s_h
         changed = False
         if self._at_start:
-            self._start, changed = (-self.half_length - s_h, self.half_length - s_h), True
+            self._start, changed = hand_extent(self.half_length, s_h), True
         if flush and f_n >= self.params.min_normal_force:
             u = geometry.face_position(geometry.centre_of_pressure(f_n, torque), s_h)
             noise = self.params.torque_noise / f_n
@@ -146,6 +159,5 @@ class FaceEstimator:
 
     def _report(self) -> None:
         """The face from the evidence: its hull, ``margin`` inside."""
-        low, high = min(self._low, self._start[0]), max(self._high, self._start[1])
-        margin = self.params.margin
-        self.face = (low + margin, high - margin) if low <= high else NO_FACE
+        hull = (min(self._low, self._start[0]), max(self._high, self._start[1]))
+        self.face = inside(hull, self.params.margin)

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ccopt.control.targets import TargetGoal, estimated_statics
+from ccopt.control.targets import TargetGoal, estimated_statics, seeks_friction
 from ccopt.estimation.estimator import Estimate
 from ccopt.modes import Motion
 from ccopt.planning.planner import Plan, PlannerParams, next_motion
@@ -168,7 +168,7 @@ class GoalSequencer:
         if plan.status == "unreachable":
             return self.end(now, "unreachable", plan.reason)
         self._last = (plan.motion, float(estimate.theta_o))
-        probe = plan.explores or _seeks_a_friction_face(plan.motion, estimate)
+        probe = plan.explores or seeks_friction(estimate, plan.motion.motion)
         return self._take(dataclasses.replace(plan.motion, explore=True) if probe else plan.motion)
 
     def _plan(self, estimate: Estimate, s_g_origin: float) -> Plan:
@@ -210,16 +210,6 @@ class GoalSequencer:
     def end(self, now: float, status: str, reason: str = "") -> GoalResult:
         """The goal's result, ending now with ``status``."""
         return GoalResult(self.index, self.goal, self.start_time, now, status, reason, self.motions)
-
-
-def _seeks_a_friction_face(step: Step, estimate: Estimate) -> bool:
-    """Whether ``step`` is a ground slide towards a side whose friction face is not known: it is
-    sought past the sticking forces seen (:func:`ccopt.control.targets.estimated_statics`), where
-    the face may or may not be, so it probes the ground's friction."""
-    if step.kind != "slide_ground":
-        return False
-    _, _, known = estimate.friction_faces
-    return not known[0 if step.delta > 0.0 else 1]
 
 
 def _usable(estimate: Estimate) -> bool:

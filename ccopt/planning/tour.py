@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ccopt import geometry, statics
+from ccopt.estimation import face
 from ccopt.modes import Motion
 from ccopt.objects import PlanarObject
 from ccopt.planning.graph import ConfigurationGraph, Edge, GraphParams, Node
@@ -191,14 +192,6 @@ def vertex_range(
     return ends[0], ends[1]
 
 
-def _start_face(s_h: float, params: LoopParams) -> tuple[float, float]:
-    """The face a run started at ``s_h`` (m) knows from its start: under the whole hand, the
-    estimate's margin inside (:class:`ccopt.estimation.face.FaceParams`), m from the ground contact's
-    foot."""
-    half, margin = params.hand.half_length, params.estimator_params.face.margin
-    return geometry.face_position(-half, s_h) + margin, geometry.face_position(half, s_h) - margin
-
-
 def plan_tour(
     obj: PlanarObject,
     params: LoopParams,
@@ -239,6 +232,7 @@ def plan_tour(
     theta_range = (max(angle_range[0], tilt_low + clearance), min(angle_range[1], tilt_high - clearance))
     wanted = int(tour_options.get("slides", 4))
     lever = params.estimator_params.friction.torque_margin * params.hand.half_length  # as the run knows it
+    face_margin = params.estimator_params.face.margin
     f_min, f_max = params.hand.force_limits
     forces = (f_min, f_min + force_share * (f_max - f_min))  # headroom for what the model ignores
     best: tuple[tuple[int, float], LoopParams, Tour] | None = None
@@ -248,7 +242,8 @@ def plan_tour(
         truth = statics.true_statics(obj, start, params.hand)
         graph_params = GraphParams(s_h_range=truth.s_h_range, theta_range=theta_range, min_margin=margin)
         where = (truth.theta_o, truth.s_h)
-        known = dataclasses.replace(truth.statics, face=_start_face(start.s_h, params))
+        start_face = face.inside(face.hand_extent(params.hand.half_length, start.s_h), face_margin)
+        known = dataclasses.replace(truth.statics, face=start_face)
         graph = ConfigurationGraph(known, where, lever, forces, graph_params)
         if graph.margin(Node(0, 0), Motion.HOLD) < margin:
             continue  # the run could not even hold its start comfortably
