@@ -64,6 +64,7 @@ class Row(IntEnum):
 N_CONE_ROWS = len(Row)
 HAND_ROWS = (Row.HAND_SLIDE_POS, Row.HAND_SLIDE_NEG, Row.HAND_PIVOT_POS, Row.HAND_PIVOT_NEG)
 GROUND_ROWS = (Row.GROUND_SLIDE_POS, Row.GROUND_SLIDE_NEG)
+_HAND_SLIDE_POS, _HAND_SLIDE_NEG = int(Row.HAND_SLIDE_POS), int(Row.HAND_SLIDE_NEG)  # plain ints index faster
 
 
 def _sym(name: str, rows: int = 1, cols: int = 1) -> ca.SX:
@@ -237,7 +238,7 @@ def with_hand_friction(rows: ArrayLike, mu_h: float) -> np.ndarray:
     """Cone rows ``N`` (6×3, :class:`Row` order) with the hand friction rows taken at ``mu_h``
     (:data:`hand_rows`: ``−μ_h f_n ∓ f_t ≤ 0``)."""
     changed = np.array(rows, dtype=float)
-    changed[[Row.HAND_SLIDE_POS, Row.HAND_SLIDE_NEG], 0] = -mu_h
+    changed[_HAND_SLIDE_POS, 0] = changed[_HAND_SLIDE_NEG, 0] = -mu_h  # the controller's every tick
     return changed
 
 

@@ -349,3 +349,38 @@ def test_a_ground_slip_while_the_hand_slides_too_gives_both_from_the_tilted_hand
         estimate = step(estimator, pose, HAND_SLIDES, ground_may_slide=True)
     assert estimate.contact_valid and estimate.s_h_valid
     assert abs(estimate.s_g - r_o[0]) < 2e-3 and abs(estimate.s_h - (S_H + 0.006)) < 2e-3
+
+
+@pytest.mark.parametrize("theta_deg", [-20.0, -10.0, 10.0, 25.0])
+def test_a_hand_that_slides_in_a_commanded_ground_slide_is_told_by_the_face_tilt(theta_deg):
+    """The ground is commanded to slide (the kinematics follow it rigidly) but the hand slides
+    10 mm along the face instead, the ground contact stays: by truth, ``ŝ_g`` and ``r̂_o`` stay within
+    a millimetre and ``ŝ_h`` follows the hand, from once ``ŷ_o`` would have moved by
+    ``hand_slide_height`` and by ``hand_slide_travel sin θ`` on."""
+    estimator, rng = KinematicEstimator(L_H), np.random.default_rng(15)
+    pivot_about_ground(estimator, rng)
+    theta, slide = math.radians(theta_deg), 0.01
+    params = KinematicsParams()
+    caught = max(params.hand_slide_height / abs(math.sin(theta)), params.hand_slide_travel)  # hand travel, m
+    for s_h in np.linspace(S_H, S_H + slide, 400):
+        pose = measured(geometry.hand_pose_from_contact(theta, s_h, D, R_O), rng)
+        estimate = step(estimator, pose, GROUND_SLIDES)
+        if s_h - S_H > caught + 1e-3:
+            assert abs(estimate.s_g - R_O[0]) < 1e-3 and abs(estimate.s_h - s_h) < 1e-3
+    assert estimate.contact_valid and np.all(np.abs(estimate.r_o - R_O) < 1e-3)
+    assert abs(estimate.s_h - (S_H + slide)) < 1e-3
+
+
+@pytest.mark.parametrize("theta_deg", [-25.0, 10.0, 30.0])
+def test_a_ground_slide_whose_hand_sticks_is_not_taken_for_a_hand_slide(theta_deg):
+    """The control case: the ground slides 10 mm and the hand sticks. ``ŷ_o`` keeps its height, so
+    the motion stays the ground's (by truth, within a millimetre) and ``ŝ_h`` stays."""
+    estimator, rng = KinematicEstimator(L_H), np.random.default_rng(16)
+    pivot_about_ground(estimator, rng)
+    theta = math.radians(theta_deg)
+    for x_o in np.linspace(R_O[0], R_O[0] - 0.01, 400):
+        r_o = np.array([x_o, R_O[1]])
+        pose = measured(geometry.hand_pose_from_contact(theta, S_H, D, r_o), rng)
+        estimate = step(estimator, pose, GROUND_SLIDES)
+        assert abs(estimate.s_g - x_o) < 1e-3
+    assert abs(estimate.s_h - S_H) < 1e-3
