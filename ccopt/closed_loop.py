@@ -308,8 +308,8 @@ class _StepTracker:
         settle_time: float,
         slide_onset: float,
         report_hold: float,
+        hand_give: float,
         sequencer: Callable[[int, Goal, float], GoalSequencer] | None = None,
-        hand_give: float = 0.0,
     ) -> None:
         self.steps = schedule.steps
         self.settle_time = settle_time
@@ -687,8 +687,8 @@ class _Loop:
             params.settle_time,
             params.controller_params.slide_onset,
             params.estimator_params.modes.hold_time,
-            self._sequencer,
             params.estimator_params.kinematics.hand_slide_travel,
+            self._sequencer,
         )
         self.target = np.array(self.plant.target(), dtype=float)
         self.velocity = np.zeros(3)

@@ -210,8 +210,7 @@ def _fit_rows(
     if not np.isfinite(support).all():
         return None
     geometry = _direction_set(directions)
-    lines, corners = _sweep(geometry.ux, geometry.uy, support.tolist())
-    active, vertices = list(lines), list(corners)
+    active, vertices = _polygon(geometry, support)
     if not math.isfinite(sum([x + y for x, y in vertices])):
         return None
     rows, fitted = [], []
@@ -288,7 +287,11 @@ def half_plane_polygon(
     ``i`` runs from vertex ``i − 1`` to vertex ``i``; NaN where they are parallel. The classic
     sorted-angle deque sweep, O(K).
     """
-    geometry = _direction_set(directions)
+    return _polygon(_direction_set(directions), support)
+
+
+def _polygon(geometry: _DirectionSet, support: np.ndarray) -> tuple[list[int], list[tuple[float, float]]]:
+    """:func:`half_plane_polygon` of the directions of ``geometry``."""
     lines, corners = _sweep(geometry.ux, geometry.uy, support.tolist())
     return list(lines), list(corners)
 
