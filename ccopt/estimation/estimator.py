@@ -645,7 +645,7 @@ def _assemble(
     gravity: GravityEstimate,
     slid: tuple[bool, bool],
     hand_slid: bool,
-    face: tuple[float, float] = UNKNOWN_FACE,
+    face: tuple[float, float],
 ) -> Estimate:
     """An :class:`Estimate` from its parts (the arrays read-only); ``rough`` is ``(kinematics_mean,
     kinematics_std)``, ``slid`` the ways the ground was seen sliding."""
@@ -715,6 +715,7 @@ def _empty_estimate(time: float, friction: HandFrictionEstimator, ground: Ground
         UNKNOWN_GRAVITY,
         (False, False),
         False,
+        UNKNOWN_FACE,
     )
 
 

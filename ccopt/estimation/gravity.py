@@ -36,6 +36,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from ccopt import geometry
 from ccopt.estimation.kinematics import KinematicEstimate
 from ccopt.estimation.quantile import check_number
 
@@ -57,8 +58,9 @@ class GravityParams:
         valid_std: the estimate is valid once the standard deviation of ``M̂(θ_o)`` is at most
             this (N·m).
         gate: a sample whose moment differs from the estimate so far by more than this many
-            standard deviations (its own ``moment_noise`` and ``M̂``'s at its angle) is not used
-            (:meth:`GravityEstimator.update`).
+            standard deviations (its own, ``moment_noise`` scaled with the lever beyond
+            :data:`NOISE_LEVER`, and ``M̂``'s at its angle) is not used
+            (:meth:`GravityEstimator._consistent`).
     """
 
     moment_noise: float = 0.04
@@ -278,8 +280,7 @@ def _moment_sample(theta_o: float, hand_pose: list[float], hand_wrench: list[flo
     (world, m/rad) and wrench ``(f_n, f_t, τ)`` (hand frame, N/N·m)."""
     x_h, y_h, theta_h = hand_pose
     f_n, f_t, torque = hand_wrench
-    sin_h, cos_h = math.sin(theta_h), math.cos(theta_h)
-    f_x, f_y = f_n * sin_h + f_t * cos_h, -f_n * cos_h + f_t * sin_h  # f_n e_n + f_t e_t
+    f_x, f_y = geometry.hand_to_world(geometry.hand_axes(theta_h), f_n, f_t)
     return math.cos(theta_o), math.sin(theta_o), -torque - (x_h * f_y - y_h * f_x), f_x, f_y
 
 

@@ -61,8 +61,6 @@ class GraphParams:
             raise ValueError(f"empty ranges: θ {self.theta_range}, s_h {self.s_h_range}")
 
 
-
-
 @dataclass(frozen=True, order=True)
 class Node:
     """A grid configuration: ``θ_o = θ_start + i · pivot_step``, ``s_h = s_h_start + j · s_h_step``."""
