@@ -385,7 +385,7 @@ class _StepTracker:
         targets = self._nominal.copy()
         k = self.step.coordinate
         if k is not None:
-            if modes.REMOVED_ROWS[self.step.motion]:
+            if self.step.motion in modes.SLIDES:
                 targets[k] = current[k]  # a slide cannot come back: it goes its length from here
             targets[k] += self.step.delta
         self._nominal = targets.copy()
@@ -538,7 +538,7 @@ class _StepTracker:
         """Whether a slide has moved its coordinate the commanded way by the slide onset (other
         motions count as started)."""
         step, command = self.step, self.command
-        if not modes.REMOVED_ROWS[step.motion] or coordinates is None:
+        if step.motion not in modes.SLIDES or coordinates is None:
             return True
         k = step.coordinate
         return (coordinates[k] - command.start[k]) * math.copysign(1.0, step.delta) >= self.slide_onset
@@ -550,7 +550,7 @@ class _StepTracker:
         shorter than the controller's slide onset never frees its coordinate: it regulates it
         (e.g. against a push) and ends at its timeout."""
         k, step = self.step.coordinate, self.step
-        if coordinates is None or not modes.REMOVED_ROWS[step.motion] or abs(step.delta) < self.slide_onset:
+        if coordinates is None or step.motion not in modes.SLIDES or abs(step.delta) < self.slide_onset:
             return False
         return (coordinates[k] - self.command.targets[k]) * math.copysign(1.0, step.delta) > step.tolerance
 
@@ -797,7 +797,7 @@ class _Loop:
         coordinates = tracker.update(self.now, estimate, hand_pose)
         if tracker.done:
             return
-        if tracker.rolling and modes.REMOVED_ROWS[tracker.step.motion]:
+        if tracker.rolling and tracker.step.motion in modes.SLIDES:
             self.velocity = np.zeros(3)  # a slide whose hand rolls: pushed on, the roll runs along the face
             return
         if coordinates is None:  # the estimate is unusable: hold where the command says

@@ -77,6 +77,9 @@ REMOVED_ROWS: dict[Motion, tuple[Row, ...]] = {
 the ground contact with both contacts sticking and the hand flush is admissible without removing
 any row (paper Fig. 2b)."""
 
+SLIDES = frozenset(motion for motion, rows in REMOVED_ROWS.items() if rows)
+"""The motions that slide a contact: each removes a friction row (:data:`REMOVED_ROWS`)."""
+
 _CONFIGURATIONS: dict[Motion, ContactConfiguration] = {
     Motion.HOLD: ContactConfiguration(),
     Motion.PIVOT: ContactConfiguration(),

@@ -36,3 +36,12 @@ def test_signed_helpers_and_errors():
         modes.slide_hand(0.0)
     with pytest.raises(ValueError, match="unknown motion 'twirl'"):
         modes.kept_rows("twirl")
+
+
+def test_slides_are_the_motions_whose_configuration_moves_a_contact():
+    """A motion is a slide exactly where its contact configuration sets the hand or the ground sliding."""
+    for motion in Motion:
+        configuration = modes.configuration(motion)
+        contacts = (configuration.hand_mode, configuration.ground_mode)
+        moving = any(mode != ContactMode.STICK for mode in contacts)
+        assert (motion in modes.SLIDES) == moving, motion

@@ -413,7 +413,7 @@ class Controller:
         step = self._units * solution.step  # the QP's variable is the step in task units
         if not all(map(math.isfinite, step.tolist())):  # the solver failed: no motion this tick
             return self._held(instance, solution.backend)
-        limit = self._max_steps[bool(modes.REMOVED_ROWS[command.motion])]  # a slide's is slower
+        limit = self._max_steps[command.motion in modes.SLIDES]  # a slide's is slower
         excess = max(map(truediv, map(abs, step.tolist()), limit))
         if excess > 1.0:  # scaled, not clipped: the step keeps its direction, and with it the balance
             step = step / excess  # of the wrench it predicts; the solution reported is the scaled step's
@@ -549,7 +549,7 @@ class Controller:
     def _slide_begun(self, state: ControlInput, command: Command) -> bool:
         """Whether the commanded slide has begun: its coordinate has moved by ``slide_onset`` (m) the
         commanded way since the step began (never for a hold or a pivot, nor without a start)."""
-        if not modes.REMOVED_ROWS[command.motion] or command.start is None:
+        if command.motion not in modes.SLIDES or command.start is None:
             return False
         driven = modes.driven_coordinate(command.motion)
         delta = command.targets[driven] - command.start[driven]

@@ -40,7 +40,7 @@ Case = tuple[Motion, bool]
 CASES: tuple[Case, ...] = tuple(
     (motion, begun)
     for motion in Motion
-    for begun in ((False, True) if modes.REMOVED_ROWS[motion] else (False,))
+    for begun in ((False, True) if motion in modes.SLIDES else (False,))
 )
 
 N_ROWS = N_CONE_ROWS + 2
@@ -302,7 +302,7 @@ def build_tick_functions() -> dict[Case, ca.Function]:
         )
         arguments = [ca.MX.sym(argument, *shape) for argument, shape in INPUTS]
         packed = instance(*arguments)
-        limit = "slide_max_step" if modes.REMOVED_ROWS[case[0]] else "max_step"  # a slide's is slower
+        limit = "slide_max_step" if case[0] in modes.SLIDES else "max_step"  # a slide's is slower
         output = finish(packed, solve(packed), arguments[0], _split(arguments[0], PARAMETERS)[limit])
         functions[case] = ca.Function(
             name, arguments, [output], [argument for argument, _ in INPUTS], ["out"]

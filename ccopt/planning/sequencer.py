@@ -41,7 +41,7 @@ import numpy as np
 from ccopt.control.targets import TargetGoal, estimated_statics, seeks_friction
 from ccopt.estimation.estimator import Estimate
 from ccopt.modes import Motion
-from ccopt.planning.planner import Plan, PlannerParams, next_motion
+from ccopt.planning.planner import Plan, PlannerParams, StaticsOf, next_motion
 from ccopt.schedule import Goal, Step, exploration
 from ccopt.statics import ObjectStatics
 
@@ -217,7 +217,7 @@ def _usable(estimate: Estimate) -> bool:
     return bool(estimate.kinematics_valid) and all(map(math.isfinite, values))
 
 
-def _statics_of(estimate: Estimate, mu_h: float | None, push: float):
+def _statics_of(estimate: Estimate, mu_h: float | None, push: float) -> StaticsOf:
     """The estimated statics per motion (at the current hand angle's gravity moment where no model
     is estimated yet), with the hand friction ``mu_h`` if given and a ground slide sought ``push`` (N)
     past the sticking forces seen where its friction face is not known
