@@ -347,9 +347,9 @@ def test_no_ground_row_is_fitted_before_the_ground_slid(slides):
 
 
 def test_each_side_is_fitted_once_the_ground_slid_that_way(slides):
-    """After the slide to +x only the +x row (GROUND_SLIDE_POS) is fitted and μ_g is still NaN; after
-    the slide to −x both are, and μ_g is the true one within 5 %. μ_g is NaN exactly while a side is
-    not fitted."""
+    """After the slide to +x only the +x row (GROUND_SLIDE_POS) is fitted; after the slide to −x both
+    are, and μ_g is the true one within 5 %. μ_g is NaN exactly while neither both sides are fitted
+    nor the sliding forces' fit is determined."""
     run, estimates, _ = slides
     end_of_positive = len(run.phases) - run.phases[::-1].index("slide +") - 1
     assert estimates[end_of_positive].ground_fitted == (True, False)
@@ -358,7 +358,27 @@ def test_each_side_is_fitted_once_the_ground_slid_that_way(slides):
     assert last.ground_fitted == (True, True)
     assert last.mu_g == pytest.approx(MU_G, rel=0.05)
     for estimate in estimates:
-        assert math.isnan(estimate.mu_g) == (not all(estimate.ground_fitted))
+        known = all(estimate.ground_fitted) or estimate.sliding_face.determined
+        assert math.isnan(estimate.mu_g) == (not known)
+
+
+def test_the_sliding_forces_of_one_slide_over_a_range_of_normal_forces_give_both_faces(slides):
+    """The slide to +x presses with 6–14 N: its forces alone determine the friction faces on both
+    sides (mirrored about world up), within 5 % of μ_g and 0.5 N of the true rows
+    (``contact.model_ground_rows``), before the ground ever slid to −x; the hull's own faces do not
+    (its −x side is unknown)."""
+    run, estimates, _ = slides
+    end_of_positive = len(run.phases) - run.phases[::-1].index("slide +") - 1
+    before = estimates[end_of_positive]
+    assert not any(e.sliding_face.determined for e in estimates[: run.phases.index("slide +") + HOLD])
+    assert before.sliding_face.determined
+    assert before.sliding_face.mu_g == pytest.approx(MU_G, rel=0.05)
+    assert before.sliding_face.apex == pytest.approx(MASS * geometry.GRAVITY, abs=0.5)
+    faces, offsets, known = before.friction_faces
+    rows, bounds = true_rows()
+    assert known == (True, True)
+    np.testing.assert_allclose(faces, rows, atol=0.02)
+    np.testing.assert_allclose(offsets, bounds, atol=0.5)
 
 
 def jitter_run(seed: int = 0) -> Run:

@@ -54,6 +54,7 @@ from ccopt.estimation.gravity import GravityEstimate, GravityEstimator, GravityP
 from ccopt.estimation.ground_cone import GroundCone, GroundConeEstimator, GroundConeParams
 from ccopt.estimation.kinematics import KinematicEstimate, KinematicEstimator, KinematicsParams
 from ccopt.estimation.quantile import check_number
+from ccopt.estimation.sliding_face import UNDETERMINED, SlidingFace, SlidingFaceFit, SlidingFaceParams
 from ccopt.hand import Hand
 from ccopt.modes import ContactConfiguration, ContactMode, HandGeometry
 
@@ -95,6 +96,8 @@ class EstimatorParams:
         kinematics: kinematic estimator.
         gravity: the weight's moment about the ground contact.
         theta_filter: filter of ``θ_o`` while it is the hand's angle (flush hand).
+        face: where the face under the hand is known to be.
+        sliding_face: the ground's friction face fitted to the forces of its slides.
         contact_force: the hand is in contact while ``f_n`` exceeds this (N).
         slid_distance: a contact's estimated position (``s_g``, ``s_h``) moving this far (m) one
             way while it is meant to slide that way shows that it slid (:class:`SlideEvidence`):
@@ -109,6 +112,7 @@ class EstimatorParams:
     gravity: GravityParams = field(default_factory=GravityParams)
     theta_filter: AngleFilterParams = field(default_factory=AngleFilterParams)
     face: FaceParams = field(default_factory=FaceParams)
+    sliding_face: SlidingFaceParams = field(default_factory=SlidingFaceParams)
     contact_force: float = 1.0
     slid_distance: float = 2e-3
 
@@ -122,6 +126,7 @@ class EstimatorParams:
             ("gravity", GravityParams),
             ("theta_filter", AngleFilterParams),
             ("face", FaceParams),
+            ("sliding_face", SlidingFaceParams),
         )
         validation.check_types((name, getattr(self, name), kind) for name, kind in parts)
         check_number("contact_force", self.contact_force, low_open=False)
@@ -143,12 +148,15 @@ class Estimate:
         torque_lever: ``l_h_eff`` (m), the hand torque rows are ``|τ| ≤ l_h_eff f_n``.
         ground_rows, ground_bounds: ground rows ``A f ≤ b`` on the world hand force (2×2 unit
             normals, 2 offsets in N), rows ``GROUND_SLIDE_POS``, ``GROUND_SLIDE_NEG``.
-        mu_g: ground friction coefficient from the two fitted faces (NaN until both are fitted).
+        mu_g: ground friction coefficient: the sliding forces' (``sliding_face``) once determined,
+            else from the two fitted hull faces (NaN until both are fitted).
         ground_fitted: per ground row, whether it is the ground's friction face: the hull has a
             straight face on that side *and* the ground slid that way (:class:`SlideEvidence`).
             Otherwise the row is where the sticking forces seen end (a face of the data, or the
             conservative prior row): a bound the classifier respects, but not the friction limit,
             so the statics of a motion (:mod:`ccopt.control.targets`) do not count it as one.
+        sliding_face: the ground's friction faces fitted to the forces of its slides
+            (:mod:`.sliding_face`); where determined, they are :attr:`friction_faces`.
         hand_mode, hand_geometry, ground_mode: the classified contact configuration.
         in_contact: whether the hand touches the object (``f_n > contact_force``).
         theta_o, s_h, s_g, d, r_o: the kinematics (rad, m), NaN where not estimated.
@@ -210,11 +218,15 @@ class Estimate:
     hand_slid: bool = False
     ground_anchor: int = 0
     face: tuple[float, float] = UNKNOWN_FACE
+    sliding_face: SlidingFace = UNDETERMINED
 
     @property
     def friction_faces(self) -> tuple[np.ndarray, np.ndarray, tuple[bool, bool]]:
-        """``(A, b, known)``, the ground's friction faces as far as they are known
-        (:func:`ground_friction_faces`): what the statics of a motion and the planner judge with."""
+        """``(A, b, known)``, the ground's friction faces as far as they are known: fitted to the
+        sliding forces where that fit is determined, else the hull's (:func:`ground_friction_faces`).
+        What the statics of a motion and the planner judge with."""
+        if self.sliding_face.determined:
+            return _sliding_faces(self.sliding_face)
         return ground_friction_faces(self.ground_rows, self.ground_bounds, self.ground_fitted)
 
     @property
@@ -250,6 +262,7 @@ class Estimator:
         self.gravity = GravityEstimator(self.params.gravity)
         self.face = FaceEstimator(self.hand.half_length, self.params.face)
         self.ground_slides = SlideEvidence(self.params.slid_distance)
+        self.sliding_face = SlidingFaceFit(self.params.sliding_face)
         self.hand_slides = SlideEvidence(self.params.slid_distance)
         self._cone_input = np.zeros(12)
         self._contact_force = self.params.contact_force
@@ -293,9 +306,10 @@ class Estimator:
         axes = geometry.hand_axes(theta_h)
         in_contact = f_n > self._contact_force
         friction = self.friction
+        force_world = geometry.hand_to_world(axes, f_n, f_t)
         if in_contact:
             friction.update(f_n, f_t)
-            self.ground.update(time, geometry.hand_to_world(axes, f_n, f_t))
+            self.ground.update(time, force_world)
         ground = self.ground.cone
         mu_h, lever = friction.mu_h, friction.l_h_eff
         cone, margins = self._cone(theta_h, mu_h, lever, ground, wrench)
@@ -314,7 +328,10 @@ class Estimator:
         gravity = self.gravity.update(
             theta_o, pose_values, wrench_values, kinematics, self.kinematics.ground_contact()
         )
-        slid = self._slid(commanded, kinematics, theta_h, both)
+        slid, ground_way = self._slid(commanded, kinematics, theta_h, both)
+        sliding_face = self.sliding_face.update(
+            time, force_world, ground_way if in_contact else 0, self.ground_slides.confirmed
+        )
         hand_slid = self.hand_slides.slid
         known = kinematics.theta_o_valid and kinematics.s_h_valid and kinematics.contact_valid
         flush = in_contact and likely.hand_geometry == _FLUSH
@@ -338,6 +355,7 @@ class Estimator:
             slid,
             hand_slid[0] or hand_slid[1],
             face,
+            sliding_face,
         )
         return self._last
 
@@ -404,15 +422,17 @@ class Estimator:
         kinematics: KinematicEstimate,
         theta_h: float,
         either: bool,
-    ) -> tuple[bool, bool]:
-        """Update the slide evidence of both contacts; the ways the ground slid. Without a command
-        the ground counts while the kinematics let it move; the hand does not count. While
-        ``either`` contact may be the one sliding (:func:`either_slides`), the ground does not."""
+    ) -> tuple[tuple[bool, bool], int | None]:
+        """Update the slide evidence of both contacts; the ways the ground slid, and the way it is
+        meant to slide now. Without a command the ground counts while the kinematics let it move;
+        the hand does not count. While ``either`` contact may be the one sliding
+        (:func:`either_slides`), the ground does not."""
         hand = commanded.hand_mode if commanded is not None else None
         ground = commanded.ground_mode if commanded is not None else None
         self.hand_slides.update(kinematics.s_h, _sliding_way(hand), theta_h, kinematics.rough[0])
         free = None if not kinematics.ground_fixed else 0
-        return self.ground_slides.update(kinematics.s_g, 0 if either else _sliding_way(ground, free))
+        way = 0 if either else _sliding_way(ground, free)
+        return self.ground_slides.update(kinematics.s_g, way), way
 
     def _skip(self, time: float) -> Estimate:
         if self._last is None:
@@ -464,6 +484,14 @@ def ground_friction_faces(
     return faces, offsets, fitted
 
 
+@functools.lru_cache(maxsize=8)
+def _sliding_faces(face: SlidingFace) -> tuple[np.ndarray, np.ndarray, tuple[bool, bool]]:
+    """``(A, b, known)`` of a determined :class:`SlidingFace` (read-only; made once per fit)."""
+    (normal_pos, b_pos), (normal_neg, b_neg) = face.rows()
+    rows, bounds = _read_only((normal_pos, normal_neg)), _read_only((b_pos, b_neg))
+    return rows, bounds, (True, True)
+
+
 class SlideEvidence:
     """Which ways a contact has been seen sliding: while it is meant to slide one way
     (:func:`_sliding_way`), its estimated position (``s_g`` or ``s_h``) moved by at least
@@ -484,6 +512,8 @@ class SlideEvidence:
         self.distance = check_number("distance", distance)
         self.slid = [False, False]
         """Per way: ``[+, −]`` (for the ground, rows ``GROUND_SLIDE_POS``, ``GROUND_SLIDE_NEG``)."""
+        self.confirmed = 0
+        """How many times the contact was seen sliding since it was last let move."""
         self._start = math.nan  # the position where the contact was last let move
         self._angle = 0.0  # the hand's angle there
 
@@ -495,7 +525,7 @@ class SlideEvidence:
         (m) by which a turn of the hand moves ``position`` (NaN: unknown, nothing counts); the ways
         seen so far."""
         if way == 0 or not math.isfinite(position):
-            self._start = math.nan
+            self._start, self.confirmed = math.nan, 0
         elif math.isnan(self._start):
             self._start, self._angle = position, angle
         else:
@@ -504,6 +534,7 @@ class SlideEvidence:
             if abs(moved) >= needed and (way is None or moved * way > 0.0):
                 self.slid[0 if moved > 0.0 else 1] = True
                 self._start, self._angle = position, angle
+                self.confirmed += 1
         return self.slid[0], self.slid[1]
 
 
@@ -646,10 +677,12 @@ def _assemble(
     slid: tuple[bool, bool],
     hand_slid: bool,
     face: tuple[float, float],
+    sliding_face: SlidingFace,
 ) -> Estimate:
     """An :class:`Estimate` from its parts (the arrays read-only); ``rough`` is ``(kinematics_mean,
     kinematics_std)``, ``slid`` the ways the ground was seen sliding."""
     fitted = (ground.fitted[0] and slid[0], ground.fitted[1] and slid[1])
+    hull_mu_g = ground.mu_g if fitted[0] and fitted[1] else math.nan
     cone_rows, cone_bounds, margins = cone
     return validation.trusted(  # every field, each well formed by construction
         Estimate,
@@ -664,7 +697,7 @@ def _assemble(
             "torque_lever": torque_lever,
             "ground_rows": ground.A,
             "ground_bounds": ground.b,
-            "mu_g": ground.mu_g if fitted[0] and fitted[1] else math.nan,
+            "mu_g": sliding_face.mu_g if sliding_face.determined else hull_mu_g,
             "ground_fitted": fitted,
             "hand_mode": modes.hand_mode,
             "hand_geometry": modes.hand_geometry,
@@ -687,6 +720,7 @@ def _assemble(
             "hand_slid": hand_slid,
             "ground_anchor": kinematics.anchor,
             "face": face,
+            "sliding_face": sliding_face,
         },
     )
 
@@ -716,6 +750,7 @@ def _empty_estimate(time: float, friction: HandFrictionEstimator, ground: Ground
         (False, False),
         False,
         UNKNOWN_FACE,
+        UNDETERMINED,
     )
 
 
