@@ -517,13 +517,13 @@ class _StepTracker:
         ``ŝ_h`` (hand frame) moves by a few more where the object turns a little at the start of a
         steep ground slide (on random objects at −26°, 3.5 mm in 0.3 s, then the ground slid
         10 mm): a schedule's ground slide, which the truth scores, is not ended on ``ŝ_h``."""
-        kept = _KEPT_COORDINATE.get(self.step.kind)
-        limit = self.step.tolerance if kept != 1 else max(self.step.tolerance, self.hand_give)
+        kept = modes.kept_coordinate(self.step.kind)
+        limit = self.step.tolerance if kept != modes.S_H else max(self.step.tolerance, self.hand_give)
         moved = (
             coordinates is not None
             and self.use_estimate
             and kept is not None
-            and (kept != 1 or self.goal is not None)
+            and (kept != modes.S_H or self.goal is not None)
             and abs(coordinates[kept] - self.command.start[kept]) > limit
         )
         return self._lasted("slipped", moved, now, LOST_TIME)
@@ -574,8 +574,6 @@ _ROLL_REASONS = {
     "slide_hand": "the hand rolled (or was about to) on the face's end instead of sliding",
     "slide_ground": "the hand rolled (or was about to) on the face's end instead of sliding the object",
 }
-_KEPT_COORDINATE = {"slide_hand": 2, "slide_ground": 1}
-"""Per slide, the index in ``(θ_o, s_h, s_g)`` of the contact it keeps sticking."""
 _SLIPPED_REASONS = {
     "slide_hand": "the ground slid instead of the hand",
     "slide_ground": "the hand slid instead of the ground",

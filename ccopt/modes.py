@@ -110,6 +110,7 @@ _KIND: dict[Motion, Kind] = {
     Motion.SLIDE_GROUND_NEG: "slide_ground",
 }
 _DRIVES: dict[str, int | None] = {"hold": None, "pivot": THETA_O, "slide_hand": S_H, "slide_ground": S_G}
+_KEEPS: dict[str, int | None] = {"hold": None, "pivot": None, "slide_hand": S_G, "slide_ground": S_H}
 _ADMITS: dict[str, tuple[int, ...]] = {
     "hold": (THETA_O,),
     "pivot": (THETA_O,),
@@ -141,6 +142,12 @@ def motion_of(kind: str, delta: float = 0.0) -> Motion:
 def driven_coordinate(motion: Motion | str) -> int | None:
     """Index into ``(θ_o, s_h, s_g)`` of the coordinate a motion (or kind) drives; None for a hold."""
     return _DRIVES[kind_of(motion)]
+
+
+def kept_coordinate(motion: Motion | str) -> int | None:
+    """Index into ``(θ_o, s_h, s_g)`` of the position of the contact a slide keeps sticking (``s_g`` in
+    a hand slide, ``s_h`` in a ground slide); None for a hold or a pivot."""
+    return _KEEPS[kind_of(motion)]
 
 
 def driving_kind(coordinate: int | str) -> Kind:

@@ -45,3 +45,19 @@ def test_slides_are_the_motions_whose_configuration_moves_a_contact():
         contacts = (configuration.hand_mode, configuration.ground_mode)
         moving = any(mode != ContactMode.STICK for mode in contacts)
         assert (motion in modes.SLIDES) == moving, motion
+
+
+def test_a_slide_keeps_the_position_of_the_contact_its_configuration_holds_sticking():
+    """A slide's kept coordinate is ``s_h`` where its configuration keeps the hand sticking and ``s_g``
+    where it keeps the ground sticking; a motion that slides nothing keeps none."""
+    for motion in Motion:
+        configuration = modes.configuration(motion)
+        if motion not in modes.SLIDES:
+            expected = None
+        elif configuration.hand_mode == ContactMode.STICK:
+            expected = modes.S_H
+        else:
+            assert configuration.ground_mode == ContactMode.STICK, motion
+            expected = modes.S_G
+        assert modes.kept_coordinate(motion) == expected, motion
+        assert modes.kept_coordinate(modes.kind_of(motion)) == expected, motion

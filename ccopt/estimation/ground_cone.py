@@ -160,13 +160,11 @@ class GroundConeEstimator:
         back) and it is finite; the faces are refitted when ``refit_interval`` has passed.
         """
         params = self.params
-        if not (
-            time - self._last_sample >= params.sample_interval - _TIME_TOLERANCE or time < self._last_sample
-        ):
+        if not interval_passed(time, self._last_sample, params.sample_interval):
             return
         self._last_sample = time
         self._support.add(self.directions @ force_world)
-        if time - self._last_fit >= params.refit_interval - _TIME_TOLERANCE or time < self._last_fit:
+        if interval_passed(time, self._last_fit, params.refit_interval):
             self._last_fit = time
             self.refit()
 
@@ -182,6 +180,12 @@ class GroundConeEstimator:
             self.cone = fit_ground_cone(self.directions, support, self.params, count)
             self._fitted_to = fitted_to
         return self.cone
+
+
+def interval_passed(time: float, last: float, interval: float) -> bool:
+    """Whether ``interval`` (s) has passed from ``last`` to ``time`` (within rounding of sample
+    times), or time went back (a new recording): when a streaming estimate takes its next sample."""
+    return time - last >= interval - _TIME_TOLERANCE or time < last
 
 
 def fit_ground_cone(

@@ -40,11 +40,9 @@ import math
 import statistics
 from dataclasses import dataclass
 
+from ccopt.estimation.ground_cone import interval_passed
 from ccopt.geometry import WORLD_UP
 from ccopt.validation import check_number
-
-_TIME_TOLERANCE = 1e-9
-"""Sample intervals are compared with this slack (s)."""
 
 
 @dataclass(frozen=True)
@@ -150,8 +148,7 @@ class SlidingFaceFit:
             self._confirmed = confirmed
         if not self._stretch:
             self._stretch_start = time
-        interval = self.params.sample_interval - _TIME_TOLERANCE
-        if time - self._last_sample >= interval or time < self._last_sample:
+        if interval_passed(time, self._last_sample, self.params.sample_interval):
             self._last_sample = time
             (up_x, up_y), (f_x, f_y) = WORLD_UP, force_world
             outward = way * (f_x * up_y - f_y * up_x)  # along the side's horizontal direction
