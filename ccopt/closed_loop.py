@@ -339,6 +339,9 @@ class _StepTracker:
         self._nominal: np.ndarray | None = None
         self._within_since: float | None = None
         self._since: dict[str, float] = {}  # when each lasting condition (rolled, lost, slipped) began
+        self.roll_tilt: float | None = None
+        """The estimated ``θ_o`` (rad) where the hand of the pivot under way was first seen rolling
+        (the report that ends it ``rolled``, :meth:`_rolled`): where the object stopped turning."""
         self.fresh = False
         """Whether the current step has not been controlled yet (the estimated statics judge it then)."""
 
@@ -394,6 +397,7 @@ class _StepTracker:
         self.start_time = now
         self._within_since = None
         self._since.clear()
+        self.roll_tilt = None
         self.fresh = True
         return current
 
@@ -414,7 +418,7 @@ class _StepTracker:
         """The next motion: the goal under way's, else the schedule's next step (a goal's first
         motion); None at the end of the schedule."""
         if self.goal is not None:
-            answer = self.goal.next(now, estimate, self.s_g_origin, last)
+            answer = self.goal.next(now, estimate, self.s_g_origin, last, self.roll_tilt)
             if isinstance(answer, Step):
                 return answer
             self.goal_results.append(answer)
@@ -490,9 +494,11 @@ class _StepTracker:
         torque the previous motion left at the hand's limit touches it for a few samples and turns
         the object all the same (a random triangle's pivot at −26° did, for 0.04 s, and ended
         `rolled` with the true hand flush, which cut the planner's reach short of the tilt its
-        ground slide needed)."""
+        ground slide needed). The estimated tilt where a pivot's report began is :attr:`roll_tilt`."""
         if self.step.kind == "pivot":
             rolled = estimate.hand_geometry == -math.copysign(1.0, self.step.delta)
+            if rolled and "rolled" not in self._since:
+                self.roll_tilt = estimate.theta_o if estimate.theta_o_valid else None
             return self._lasted("rolled", rolled, now, ROLL_TIME + self.report_hold)
         return self._lasted("rolled", estimate.hand_geometry != HandGeometry.FLUSH, now, ROLL_TIME)
 

@@ -24,8 +24,8 @@ from ccopt.estimation.estimator import Estimator
 from ccopt.modes import Motion, motion_of
 from ccopt.objects import make_object
 from ccopt.planning.graph import GraphParams
-from ccopt.planning.planner import PlannerParams, next_motion, oracle_plan
-from ccopt.planning.sequencer import GoalSequencer
+from ccopt.planning.planner import PlannerParams, back_within, next_motion, oracle_plan
+from ccopt.planning.sequencer import GoalSequencer, tilt_limit
 from ccopt.planning.tour import vertex_range
 from ccopt.plant.mujoco_planar import HAND_ANGLE_RANGE
 from ccopt.schedule import Goal, Step, exploration, reach
@@ -267,3 +267,46 @@ def test_a_goal_explores_again_after_a_motion_lost_the_kinematics_and_fails_past
     for step in pivots[1:]:
         assert sequencer.next(1.0, unknown, None, "reached") == step
     assert sequencer.next(1.0, unknown, None, "lost").status == "failed"  # max_explorations = 2
+
+
+def test_a_tilt_beyond_the_reach_pivots_back_to_its_edge() -> None:
+    """From beyond either end of the reach by more than a pivot's tolerance, one pivot ends at that
+    end; within the tolerance (or the reach), nothing."""
+    low, high = math.radians(-20.0), math.radians(30.0)
+    tolerance = math.radians(0.7)
+    for theta, edge in ((low - math.radians(5.0), low), (high + math.radians(3.0), high)):
+        plan = back_within(theta, (low, high), PlannerParams())
+        assert plan.status == "move" and plan.motion.kind == "pivot"
+        assert math.isclose(theta + plan.motion.delta, edge, abs_tol=1e-12)
+    for theta in (low - 0.9 * tolerance, high + 0.9 * tolerance, 0.0):
+        assert back_within(theta, (low, high), PlannerParams()) is None
+
+
+def test_a_rolled_pivot_limits_the_tilt_a_degree_short_of_where_the_roll_began() -> None:
+    """Where the roll was seen past the pivot's start, the limit is a degree short of it that way;
+    unknown, or not past the start, the start."""
+    deg = math.radians
+    assert math.isclose(tilt_limit(deg(-18.3), deg(-24.0), -1), deg(-23.0))
+    assert math.isclose(tilt_limit(deg(18.3), deg(24.0), 1), deg(23.0))
+    for roll in (None, math.nan, deg(-17.0), deg(-18.8)):
+        assert tilt_limit(deg(-18.3), roll, -1) == deg(-18.3)
+
+
+def test_an_exploration_pivot_past_a_tilt_limit_turns_the_other_way() -> None:
+    """Exploring at −19° with the tilt limited at −20°: a pivot that would end below −20.7° goes up
+    instead; the others run as the exploration has them."""
+    unknown = Estimator().update(0.0, [0.0, 0.1, 0.0], [5.0, 0.0, 0.0])
+    at = dataclasses.replace(unknown, theta_o=math.radians(-19.0))
+    aim = TargetGoal(force_limits=(2.0, 25.0), nominal_force=8.0, margin=1.0)
+    sequencer = GoalSequencer(
+        0, reach(10.0), 0.0, HAND_ANGLE_RANGE, aim, tilt_limits={-1: math.radians(-20.0)}
+    )
+    steps = [sequencer.next(0.0, at, None)]
+    steps += [sequencer.next(1.0, at, None, "reached") for _ in exploration()[1:]]
+    for step, planned in zip(steps, exploration(), strict=True):
+        if planned.kind != "pivot":
+            assert step == planned
+            continue
+        beyond = -19.0 + math.degrees(planned.delta) < -20.0 - math.degrees(planned.tolerance)
+        assert step.delta == (-planned.delta if beyond else planned.delta)
+    assert any(step.delta != planned.delta for step, planned in zip(steps, exploration(), strict=True))

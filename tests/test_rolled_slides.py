@@ -7,7 +7,7 @@ friction is still a lower bound; on the triangle at 2.7° the hand ended up on t
 slides had the `rolled` ending, the hand stayed there for 2.5 s, then rolled and slid 10 mm on the
 face, and the kinematics (which take the hand as flush) read that as the ground slide: `reached`,
 with the true ground contact unmoved. Since the ground hull's faces are held above the origin the
-triangle's ground slides all slide; the pentagon's run still ends six of them `rolled`.
+triangle's ground slides all slide; the pentagon's run still ends three of its seven `rolled`.
 """
 
 from __future__ import annotations
@@ -64,8 +64,10 @@ half-length (the estimate calls a hand whose torque nears its limit maybe rollin
 
 def test_a_goal_slide_that_ends_rolled_truly_had_the_hand_at_or_over_its_edge(pentagon):
     """Each `rolled` slide: by the truth, the hand was off flush or its centre of pressure was in the
-    outer quarter of the hand, and the slide's coordinate moved less than its 2 mm tolerance (the roll
-    was caught before it passed for a slide)."""
+    outer quarter of the hand, and the roll did not pass for the slide: the estimated coordinate
+    moved no further the slide's way than the true one, to the slide's 2 mm tolerance. (A slide may
+    truly happen and the hand roll at its end: the pentagon's ground slide at 35°, the tilt a pivot
+    that rolled had turned it to, slid the ground 9.0 mm, 8.2 mm by the estimate, and ended `rolled`.)"""
     result = pentagon
     rolled = [step for step in goal_slides(result) if step.status == "rolled"]
     assert rolled
@@ -78,4 +80,6 @@ def test_a_goal_slide_that_ends_rolled_truly_had_the_hand_at_or_over_its_edge(pe
         assert np.any(geometry != 0) or np.any(at_edge), step
         k = 1 if step.kind == "slide_hand" else 2
         true = np.asarray(result.samples["true_coordinates"])[span, k]
-        assert abs(true[-1] - true[0]) < 2e-3, step
+        estimated = np.asarray(result.samples["est_coordinates"])[span, k]
+        read = (estimated[-1] - estimated[0]) - (true[-1] - true[0])
+        assert read * math.copysign(1.0, step.delta) < 2e-3, step

@@ -22,9 +22,11 @@ experimenter's oracle (:func:`oracle_plan`).
 
 Coordinates: ``θ_o`` (rad) and ``s_h`` (m) as the estimator reports them; ``s_g`` (m) relative to the
 ground contact at the run's start (``s_g_origin``). The planner never leaves ``reach`` (the robot's
-hand angles, which are the flush face's) nor the band of ``s_h`` between the start and the goal
-widened by :attr:`PlannerParams.s_h_span`; within it, the statics cut the hand's contact patch to the
-part of the face the estimate knows (``ObjectStatics.face``, :mod:`ccopt.estimation.face`).
+hand angles, which are the flush face's; a goal's sequencer cuts them where a pivot found the
+object's tipping point, and from a tilt beyond first pivots back within, :func:`back_within`) nor
+the band of ``s_h`` between the start and the goal widened by :attr:`PlannerParams.s_h_span`;
+within it, the statics cut the hand's contact patch to the part of the face the estimate knows
+(``ObjectStatics.face``, :mod:`ccopt.estimation.face`).
 """
 
 from __future__ import annotations
@@ -172,6 +174,19 @@ def _graph(
         min_margin=params.margin,
     )
     return ConfigurationGraph(statics_of, (theta, s_h), lever, force_limits, grid)
+
+
+def back_within(theta: float, reach: tuple[float, float], params: PlannerParams) -> Plan | None:
+    """A pivot back to the edge of ``reach`` from a tilt ``theta`` (rad) beyond it by more than a
+    pivot's tolerance; None within. A pivot that found the object's tipping point leaves it lying on
+    a face past the reach: no statics of the vertex hold there (a ground slide tried on a random
+    triangle lying on its face at −24.4° rolled the hand, and its failure then barred slides at
+    every tilt the vertex allowed)."""
+    low, high = reach
+    inside = min(max(theta, low), high)
+    if abs(inside - theta) <= DEFAULT_TOLERANCE["pivot"]:
+        return None
+    return Plan("move", _step("pivot", inside - theta, params))
 
 
 def _towards_ground(

@@ -23,8 +23,10 @@ answers, every time a motion ends, with the next motion or with how the goal end
   in a row did not do what they commanded.
 
 A pivot that ends ``rolled`` (the hand rolled on the face: the object stopped turning, it lies on
-another vertex or a face) marks the tilt it began at as a limit that way for the rest of the run
-(:attr:`GoalSequencer.tilt_limits`): what the estimate knows of the object's tipping points.
+another vertex or a face) marks the tilt where the roll was first seen, a degree short, as a limit
+that way for the rest of the run (:attr:`GoalSequencer.tilt_limits`): what the estimate knows of
+the object's tipping points. A goal not yet reached beyond a limit first pivots back to it
+(:func:`~ccopt.planning.planner.back_within`).
 
 ``s_g`` goals are measured from ``s_g_origin``, the estimated ground contact when the kinematics
 first became usable (the run's start, unless the ground slid before).
@@ -41,7 +43,7 @@ import numpy as np
 from ccopt.control.targets import TargetGoal, estimated_statics, seeks_friction
 from ccopt.estimation.estimator import Estimate
 from ccopt.modes import Motion
-from ccopt.planning.planner import Plan, PlannerParams, StaticsOf, next_motion
+from ccopt.planning.planner import Plan, PlannerParams, StaticsOf, back_within, next_motion
 from ccopt.schedule import Goal, Step, exploration
 from ccopt.statics import ObjectStatics
 
@@ -135,17 +137,24 @@ class GoalSequencer:
         self._last: tuple[Step, float] | None = None  # the last motion and the tilt it began at
 
     def next(
-        self, now: float, estimate: Estimate, s_g_origin: float | None, last_status: str | None = None
+        self,
+        now: float,
+        estimate: Estimate,
+        s_g_origin: float | None,
+        last_status: str | None = None,
+        roll_tilt: float | None = None,
     ) -> Step | GoalResult:
         """The next motion, or how the goal ended; ``last_status`` is how the previous motion of this
-        goal ended (None at the start)."""
+        goal ended (None at the start), ``roll_tilt`` the estimated ``θ_o`` (rad) where a pivot that
+        ended ``rolled`` was first seen rolling (None: unknown)."""
         self.misses = 0 if last_status in (None, "reached") else self.misses + 1
         if self._last is not None and last_status not in (None, "reached"):
             step, tilt = self._last
             if step.kind == "slide_ground":
                 self.failed_slides[1 if step.delta > 0 else -1] = tilt
             if step.kind == "pivot" and last_status == "rolled":
-                self.tilt_limits[1 if step.delta > 0 else -1] = tilt
+                way = 1 if step.delta > 0 else -1
+                self.tilt_limits[way] = tilt_limit(tilt, roll_tilt, way)
         if now - self.start_time >= self.goal.timeout:
             return self.end(now, "timeout", f"the goal's {self.goal.timeout:g} s ran out")
         if self.misses >= self.max_misses:
@@ -159,12 +168,13 @@ class GoalSequencer:
                 self._exploration = list(exploration())
                 self.explorations += 1
         if self._exploration:
-            return self._take(self._exploration.pop(0))
+            return self._take(self._within_limits(self._exploration.pop(0), float(estimate.theta_o)))
         if not usable:
             return self.end(now, "failed", "the kinematics are unknown after exploring")
         plan = self._plan(estimate, s_g_origin)
         if plan.status == "reached":
             return self.end(now, "reached")
+        plan = back_within(float(estimate.theta_o), self._reach(), self.params) or plan
         if plan.status == "unreachable":
             return self.end(now, "unreachable", plan.reason)
         self._last = (plan.motion, float(estimate.theta_o))
@@ -203,6 +213,19 @@ class GoalSequencer:
         low, high = max(low, self.tilt_limits.get(-1, low)), min(high, self.tilt_limits.get(1, high))
         return min(low, high), high
 
+    def _within_limits(self, step: Step, theta: float) -> Step:
+        """An exploration's pivot from ``theta`` (rad), turned the other way if it would end past the
+        reach (:meth:`_reach`) by more than its tolerance: exploring again after a pivot found the
+        object's tipping point (the kinematics lost), a random quadrilateral's probes went on 15°
+        past it onto another vertex, where no planned motion was possible any more."""
+        if step.kind != "pivot" or not math.isfinite(theta):
+            return step
+        low, high = self._reach()
+        end = theta + step.delta
+        if low - step.tolerance <= end <= high + step.tolerance:
+            return step
+        return dataclasses.replace(step, delta=-step.delta)
+
     def _take(self, step: Step) -> Step:
         self.motions += 1
         return step
@@ -210,6 +233,24 @@ class GoalSequencer:
     def end(self, now: float, status: str, reason: str = "") -> GoalResult:
         """The goal's result, ending now with ``status``."""
         return GoalResult(self.index, self.goal, self.start_time, now, status, reason, self.motions)
+
+
+ROLL_BACKOFF = math.radians(1.0)
+"""rad: a pivot that rolled the hand limits the tilt that way this far short of where the roll was
+first seen (the estimate's tilt error is a few tenths of a degree; the report begins as the object
+lands)."""
+
+
+def tilt_limit(begin: float, roll_tilt: float | None, way: int) -> float:
+    """The tilt (rad) past which a pivot ``way`` (``±1``) that began at ``begin`` and ended ``rolled``
+    cannot go: the object turned with the hand up to where the roll was first seen (``roll_tilt``,
+    less :data:`ROLL_BACKOFF`), never less than it began at. The start alone cut the reach a whole
+    pivot short: a random triangle that tips onto a face at −23.8°, whose ground slide towards
+    −s_g keeps 1 N of margin below about −20° by the estimate (−18° by the truth), was left with
+    −18.3° and its goal reported unreachable (:mod:`tests.test_tipping_point`)."""
+    if roll_tilt is None or not math.isfinite(roll_tilt):
+        return begin
+    return max(begin, roll_tilt - ROLL_BACKOFF) if way > 0 else min(begin, roll_tilt + ROLL_BACKOFF)
 
 
 def _usable(estimate: Estimate) -> bool:
