@@ -26,9 +26,10 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 
 from ccopt import contact, geometry, modes, validation
-from ccopt.contact import GROUND_ROWS
+from ccopt.contact import GROUND_ROWS, Row
 from ccopt.control.controller import Command, ControlInput, Controller, ControllerParams
 from ccopt.control.targets import UNJUDGED, StaticsTarget, TargetGoal, statics_target
+from ccopt.estimation.classifier import tight_direction
 from ccopt.estimation.estimator import Estimate, Estimator, EstimatorParams
 from ccopt.hand import Hand
 from ccopt.health import HealthParams, SensorHealth
@@ -307,15 +308,15 @@ class _StepTracker:
         schedule: Schedule,
         settle_time: float,
         slide_onset: float,
-        report_hold: float,
+        pivot_margin: float,
         hand_give: float,
         sequencer: Callable[[int, Goal, float], GoalSequencer] | None = None,
     ) -> None:
         self.steps = schedule.steps
         self.settle_time = settle_time
         self.slide_onset = slide_onset
-        self.report_hold = report_hold
-        """How long the estimate's classifier holds a pivoting report past its last tight sample (s)."""
+        self.pivot_margin = pivot_margin
+        """The estimate's classifier counts a hand torque row tight within this margin (N·m)."""
         self.hand_give = hand_give
         """How far (m) ``ŝ_h`` may move in a ground slide, at least, before the hand counts as having
         slid instead (:meth:`_other_slid`)."""
@@ -488,18 +489,24 @@ class _StepTracker:
         hand flush, so a hand on its edge is a slide becoming a roll, and the kinematics, which take
         the hand as flush, would read the roll as the slide. The classifier is conservative (a
         torque near the hand's limit reads as maybe rolling), so this ends a slide whose hand is
-        about to roll as well as one that rolled. A pivot ends only once its torque has stayed at
-        the limit for :data:`ROLL_TIME`, i.e. the report for that long past the classifier's hold
-        (``report_hold``), which stretches every tight sample by as much: a pivot begun with the
-        torque the previous motion left at the hand's limit touches it for a few samples and turns
-        the object all the same (a random triangle's pivot at −26° did, for 0.04 s, and ended
-        `rolled` with the true hand flush, which cut the planner's reach short of the tilt its
-        ground slide needed). The estimated tilt where a pivot's report began is :attr:`roll_tilt`."""
+        about to roll as well as one that rolled. A pivot ends only once its torque row has been
+        tight (within ``pivot_margin``) on every sample for :data:`ROLL_TIME`: not on the
+        classifier's report, whose hold stretches every tight sample. A pivot begun with the torque
+        the previous motion left at the hand's limit touches it for a few samples and turns the
+        object all the same (a random triangle's pivot at −26° did, for 0.04 s, and ended `rolled`
+        with the true hand flush, which cut the planner's reach short of the tilt its ground slide
+        needed); and counted on the held report a pivot that landed the object on a face ended
+        0.3 s after it landed, the hand rolled 5–7° against the object (the paper square, rectangle
+        and pentagon pivoting down to a face). The estimated tilt where a pivot's torque first came
+        to the limit is :attr:`roll_tilt`."""
         if self.step.kind == "pivot":
-            rolled = estimate.hand_geometry == -math.copysign(1.0, self.step.delta)
+            margins, pos, neg = estimate.margins, Row.HAND_PIVOT_POS, Row.HAND_PIVOT_NEG
+            known = bool(estimate.row_valid[pos])
+            raw = tight_direction(margins[pos], margins[neg], self.pivot_margin, known)
+            rolled = raw == -math.copysign(1.0, self.step.delta)
             if rolled and "rolled" not in self._since:
                 self.roll_tilt = estimate.theta_o if estimate.theta_o_valid else None
-            return self._lasted("rolled", rolled, now, ROLL_TIME + self.report_hold)
+            return self._lasted("rolled", rolled, now, ROLL_TIME)
         return self._lasted("rolled", estimate.hand_geometry != HandGeometry.FLUSH, now, ROLL_TIME)
 
     def _lasted(self, name: str, condition: bool, now: float, duration: float) -> bool:
@@ -563,8 +570,9 @@ class _StepTracker:
 
 ROLL_TIME = 0.15
 """s: a goal's motion or an exploration step whose hand the estimate sees off flush this long ends
-``rolled`` (a flush pivot's hand is classified flush; the paper square pressed flat on its face
-rolled the hand within 0.1 s of the tilt where it landed; a ground slide of the paper triangle
+``rolled`` (a pivot: its torque at the hand's limit the other way on every sample; a flush pivot's
+hand is classified flush, while the paper square pressed flat on its face rolled the hand within
+0.1 s of the tilt where it landed; a ground slide of the paper triangle
 tried at 2.7° with a bold ``μ_h`` kept its hand on the face's end for 2.5 s, then rolled it and
 slid it 10 mm, which the kinematics read as the ground sliding). Meanwhile a slide's target holds
 still (:attr:`_StepTracker.rolling`): pushed on, a hand that rolled on the paper pentagon's face in
@@ -697,7 +705,7 @@ class _Loop:
             schedule,
             params.settle_time,
             params.controller_params.slide_onset,
-            params.estimator_params.modes.hold_time,
+            params.estimator_params.modes.pivot_margin,
             params.estimator_params.kinematics.hand_slide_travel,
             self._sequencer,
         )

@@ -22,9 +22,9 @@ import math
 import numpy as np
 import pytest
 
-from ccopt.closed_loop import LoopParams, start_config
+from ccopt.closed_loop import ROLL_TIME, LoopParams, start_config
 from ccopt.experiment import run_experiment
-from ccopt.objects import from_vertices
+from ccopt.objects import from_vertices, make_object
 from ccopt.planning.tour import vertex_range
 from ccopt.schedule import Schedule, exploration, reach
 
@@ -57,3 +57,33 @@ def test_the_goal_past_a_tipping_pivot_is_reached_by_truth(done) -> None:
     assert back["status"] == "reached", back["reason"]
     assert abs(back["true_error"]["s_g_mm"]) <= 1e3 * GOALS[1].length_tolerance
     assert abs(back["true_error"]["theta_deg"]) <= math.degrees(GOALS[1].angle_tolerance)
+
+
+@pytest.fixture(scope="module")
+def flat():
+    obj = make_object("paper-square")
+    schedule = Schedule("flat", (*exploration(), reach(theta_deg=-5.0)))
+    return run_experiment(obj, schedule, LoopParams(), seed=0)
+
+
+def test_a_pivot_onto_a_face_ends_soon_after_the_hand_rolls_and_is_not_tried_again(flat) -> None:
+    """The paper square asked for −5° lies flat on its face at 0°. By the truth, the goal pivot
+    that lands it ends within ``ROLL_TIME`` + 0.1 s of the hand rolling 1° against the object
+    (counted on the classifier's held report it ended 0.37 s after), at most one other goal motion
+    (the pivot back within the limit) turns the hand 2° against the object (before the limit was
+    where the roll began, five did), and the goal is unreachable, as the oracle says."""
+    data = flat.result.samples
+    time = np.asarray(data["time"])
+    relative = np.asarray(data["true_coordinates"])[:, 0] - np.asarray(data["true_hand_pose"])[:, 2]
+    rolls = 0
+    for step in (s for s in flat.result.steps if s.goal is not None):
+        begin = int(np.searchsorted(time, step.start_time))
+        end = min(int(np.searchsorted(time, step.end_time)), len(time) - 1)
+        turned = np.abs(relative[begin : end + 1] - relative[begin])
+        rolls += bool(turned.max() > math.radians(2.0))
+        if step.status == "rolled":
+            first = time[begin + int(np.argmax(turned > math.radians(1.0)))]
+            assert step.end_time - first <= ROLL_TIME + 0.1, (step, first)
+    assert 1 <= rolls <= 2
+    (goal,) = flat.summary["goals"]
+    assert goal["status"] == "unreachable" and not goal["oracle"]["reachable"]
