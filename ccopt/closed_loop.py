@@ -341,8 +341,8 @@ class _StepTracker:
         self._within_since: float | None = None
         self._since: dict[str, float] = {}  # when each lasting condition (rolled, lost, slipped) began
         self.roll_tilt: float | None = None
-        """The estimated ``θ_o`` (rad) where the hand of the pivot under way was first seen rolling
-        (the report that ends it ``rolled``, :meth:`_rolled`): where the object stopped turning."""
+        """The estimated ``θ_o`` (rad) where the torque row that ends the pivot under way ``rolled``
+        (:meth:`_rolled`) last became tight: where the object stopped turning."""
         self.fresh = False
         """Whether the current step has not been controlled yet (the estimated statics judge it then)."""
 

@@ -174,7 +174,9 @@ class GoalSequencer:
         plan = self._plan(estimate, s_g_origin)
         if plan.status == "reached":
             return self.end(now, "reached")
-        plan = back_within(float(estimate.theta_o), self._reach(), self.params) or plan
+        back = back_within(float(estimate.theta_o), self._reach(), self.params)
+        if back is not None:
+            plan = back
         if plan.status == "unreachable":
             return self.end(now, "unreachable", plan.reason)
         self._last = (plan.motion, float(estimate.theta_o))
