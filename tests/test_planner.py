@@ -22,7 +22,7 @@ from ccopt.closed_loop import LoopParams, start_config
 from ccopt.control.targets import TargetGoal
 from ccopt.estimation.estimator import Estimator
 from ccopt.modes import Motion, motion_of
-from ccopt.objects import make_object
+from ccopt.objects import PlanarObject, from_vertices, make_object
 from ccopt.planning.graph import GraphParams
 from ccopt.planning.planner import PlannerParams, back_within, next_motion, oracle_plan
 from ccopt.planning.sequencer import GoalSequencer, tilt_limit
@@ -43,7 +43,10 @@ class Case:
 
 
 def case(name: str, added_mass: float = 0.0) -> Case:
-    obj = make_object(name, added_mass=added_mass)
+    return case_of(make_object(name, added_mass=added_mass))
+
+
+def case_of(obj: PlanarObject) -> Case:
     params = LoopParams()
     start = start_config(obj, params)
     truth = statics.true_statics(obj, start, params.hand)
@@ -59,7 +62,13 @@ def cases() -> dict[str, Case]:
         "triangle": case("paper-triangle"),
         "square": case("paper-square"),
         "heavy-triangle": case("paper-triangle", 0.5),
+        "random-triangle": case_of(from_vertices(np.array(RANDOM_TRIANGLE), 0.719, 0.659, 0.742)),
     }
+
+
+RANDOM_TRIANGLE = [[0.05064, 0.07522], [-0.06667, 0.02921], [0.04639, -0.05800]]
+"""A goals-study triangle (0.72 kg, μ_h 0.66, μ_g 0.74) whose hand slide towards ``+s_h`` keeps its
+margin only some 25° below the tilt it starts at."""
 
 
 def start_of(c: Case) -> tuple[float, float, float]:
@@ -176,6 +185,38 @@ def test_without_hand_friction_no_hand_slide_goal_is_reachable(cases: dict[str, 
         motion = Motion.SLIDE_HAND_POS if sign > 0 else Motion.SLIDE_HAND_NEG
         margin = statics.best_wrench(frictionless, theta, c.truth.s_h, motion, c.lever, FORCES).margin
         assert not margin >= 1.0
+
+
+@pytest.mark.parametrize("name", ["triangle", "square", "heavy-triangle", "random-triangle"])
+@pytest.mark.parametrize("sign", [1, -1])
+def test_an_s_h_goal_ends_at_whatever_tilt_its_closing_slide_keeps_the_margin(
+    cases: dict[str, Case], name: str, sign: int
+) -> None:
+    """The goal's tilt is free. ``s_h`` 11.5 mm away: a full hand slide (two grid steps) and then a
+    partial 1.5 mm one. The plan reaches it exactly where the reference graph reaches a node two
+    steps along ``s_h``, at any tilt, from which that partial slide keeps the margin at both ends
+    (direct LPs), and every motion keeps the margin. Before, the plan had to end within half a pivot
+    of the tilt it began at: the random triangle's goal towards ``+s_h`` was unreachable."""
+    c = cases[name]
+    params = PlannerParams()
+    closing = sign * 0.0015
+    goal = Goal(s_h=c.truth.s_h + sign * 2 * params.s_h_step + closing)
+    reference = reference_for(c, goal.s_h, params)
+    motion = Motion.SLIDE_HAND_POS if sign > 0 else Motion.SLIDE_HAND_NEG
+
+    def closes(i: int, j: int) -> bool:
+        theta, s_h = reference.config(i, j)
+        margins = [statics.best_wrench(c.truth.statics, theta, point, motion, c.lever, FORCES).margin
+                   for point in (s_h, s_h + closing)]
+        return min(margins) >= params.margin
+
+    ends = [(i, j) for i, j in bfs_distances(reference, (0, 0)) if j == 2 * sign and closes(i, j)]
+    answer = oracle_plan(c.truth.statics, start_of(c), goal, 0.0, c.reach, c.lever, FORCES, params,
+                         face=c.truth.s_h_range)
+    assert (answer.status == "reached") == bool(ends), answer.reason
+    assert_plan_keeps_margin(c, answer.motions, params)
+    if name == "random-triangle" and sign > 0:
+        assert ends and all(i != 0 for i, _ in ends)  # the case this guards
 
 
 def test_a_goal_already_within_the_aim_is_reached_at_once(cases: dict[str, Case]) -> None:
