@@ -497,8 +497,8 @@ class _StepTracker:
         with the true hand flush, which cut the planner's reach short of the tilt its ground slide
         needed); and counted on the held report a pivot that landed the object on a face ended
         0.3 s after it landed, the hand rolled 5–7° against the object (the paper square, rectangle
-        and pentagon pivoting down to a face). The estimated tilt where a pivot's torque first came
-        to the limit is :attr:`roll_tilt`."""
+        and pentagon pivoting down to a face). The estimated tilt where the stretch of tight samples
+        that ends the pivot began is :attr:`roll_tilt`."""
         if self.step.kind == "pivot":
             margins, pos, neg = estimate.margins, Row.HAND_PIVOT_POS, Row.HAND_PIVOT_NEG
             known = bool(estimate.row_valid[pos])

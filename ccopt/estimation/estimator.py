@@ -326,7 +326,7 @@ class Estimator:
         else:
             self.theta_filter.reset()
         gravity = self.gravity.update(
-            theta_o, pose_values, wrench_values, kinematics, self.kinematics.ground_contact()
+            theta_o, pose_values, wrench_values, kinematics, self.kinematics.ground_contact(), force_world
         )
         slid, ground_way = self._slid(commanded, kinematics, theta_h, both)
         sliding_face = self.sliding_face.update(

@@ -164,12 +164,14 @@ class GravityEstimator:
         hand_wrench: list[float],
         kinematics: KinematicEstimate,
         contact: _GroundContact,
+        force_world: tuple[float, float] | None = None,
     ) -> GravityEstimate:
         """One sample (see :meth:`add`), used if the kinematics regressed it on a fixed ground
         contact and, where that contact is known, its moment about it agrees with the estimate so
-        far (:meth:`_consistent`); ``contact`` is their ground contact estimate. A reset of the
-        kinematics forgets everything; a move of the ground contact (a new ``anchor``) ends the
-        segment."""
+        far (:meth:`_consistent`); ``contact`` is their ground contact estimate, ``force_world`` the
+        hand force in world axes where the caller has it (N; else it is made from the wrench). A
+        reset of the kinematics forgets everything; a move of the ground contact (a new ``anchor``)
+        ends the segment."""
         epoch = (kinematics.resets, kinematics.anchor)
         if epoch[0] != self._epoch[0]:
             self.reset()
@@ -178,7 +180,7 @@ class GravityEstimator:
         self._epoch, self._contact = epoch, contact
         known = math.isfinite(kinematics.rough[1]) and math.isfinite(kinematics.rough[2])  # r_o
         if kinematics.ground_fixed and math.isfinite(theta_o):
-            sample = _moment_sample(theta_o, hand_pose, hand_wrench)
+            sample = _moment_sample(theta_o, hand_pose, hand_wrench, force_world)
             if not known or self._consistent(sample, hand_pose, contact):
                 self._accumulate(*sample)
         return self.estimate(theta_o, contact if known else None, kinematics.contact_valid)
@@ -275,12 +277,20 @@ _MomentSample = tuple[float, float, float, float, float]
 hand force (N)."""
 
 
-def _moment_sample(theta_o: float, hand_pose: list[float], hand_wrench: list[float]) -> _MomentSample:
+def _moment_sample(
+    theta_o: float,
+    hand_pose: list[float],
+    hand_wrench: list[float],
+    force_world: tuple[float, float] | None = None,
+) -> _MomentSample:
     """One sample's terms (:data:`_MomentSample`) from ``θ_o`` (rad), the hand pose ``(x_h, y_h, θ_h)``
-    (world, m/rad) and wrench ``(f_n, f_t, τ)`` (hand frame, N/N·m)."""
+    (world, m/rad) and wrench ``(f_n, f_t, τ)`` (hand frame, N/N·m), its force in world axes
+    ``force_world`` (N) if known."""
     x_h, y_h, theta_h = hand_pose
     f_n, f_t, torque = hand_wrench
-    f_x, f_y = geometry.hand_to_world(geometry.hand_axes(theta_h), f_n, f_t)
+    if force_world is None:
+        force_world = geometry.hand_to_world(geometry.hand_axes(theta_h), f_n, f_t)
+    f_x, f_y = force_world
     return math.cos(theta_o), math.sin(theta_o), -torque - (x_h * f_y - y_h * f_x), f_x, f_y
 
 

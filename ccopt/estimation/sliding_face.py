@@ -40,7 +40,7 @@ import math
 import statistics
 from dataclasses import dataclass
 
-from ccopt.estimation.ground_cone import interval_passed
+from ccopt.estimation.ground_cone import face_normal, interval_passed
 from ccopt.geometry import WORLD_UP
 from ccopt.validation import check_number
 
@@ -103,14 +103,9 @@ class SlidingFace:
     def rows(self) -> tuple[tuple[tuple[float, float], float], tuple[tuple[float, float], float]]:
         """The two faces as ground rows ``(unit normal (world), offset (N))``, in ``GROUND_ROWS``
         order (right face ``GROUND_SLIDE_POS`` first)."""
-        (up_x, up_y), scale = WORLD_UP, math.hypot(1.0, self.mu_g)
-        offset = self.mu_g * self.apex / scale
-        faces = []
-        for side in (1.0, -1.0):
-            right_x, right_y = side * up_y, -side * up_x  # the side's horizontal direction
-            normal = ((right_x + self.mu_g * up_x) / scale, (right_y + self.mu_g * up_y) / scale)
-            faces.append((normal, offset))
-        return faces[0], faces[1]
+        offset = self.mu_g * self.apex / math.hypot(1.0, self.mu_g)
+        right, left = (face_normal(WORLD_UP, self.mu_g, side) for side in (1.0, -1.0))
+        return (right, offset), (left, offset)
 
 
 UNDETERMINED = SlidingFace(False, math.nan, math.nan, math.nan, math.nan, 0, 0)
