@@ -140,13 +140,21 @@ def hand_force_to_world(theta_h: float, f_n: float, f_t: float) -> Array:
 
 
 def twist_hand_to_world(theta_h: float, twist_hand: ArrayLike) -> Array:
-    """Hand-frame increment ``(Δn, Δt, Δθ)`` of the hand pose to the world increment ``(Δx, Δy, Δθ)``."""
-    return planar_hand_to_world(theta_h) @ np.asarray(twist_hand, dtype=float)
+    """Hand-frame increment ``(Δn, Δt, Δθ)`` of the hand pose to the world increment ``(Δx, Δy, Δθ)``.
+
+    Written out (``Δr = Δn e_n + Δt e_t``) because the loop calls it every control tick.
+    """
+    (nx, ny), (tx, ty) = hand_axes(theta_h)
+    dn, dt, dtheta = np.asarray(twist_hand, dtype=float).tolist()
+    return np.array((nx * dn + tx * dt, ny * dn + ty * dt, dtheta))
 
 
 def twist_world_to_hand(theta_h: float, twist_world: ArrayLike) -> Array:
-    """World increment ``(Δx, Δy, Δθ)`` of the hand pose to the hand frame ``(Δn, Δt, Δθ)``."""
-    return planar_hand_to_world(theta_h).T @ np.asarray(twist_world, dtype=float)
+    """World increment ``(Δx, Δy, Δθ)`` of the hand pose to the hand frame ``(Δn, Δt, Δθ)``
+    (``Δn = e_n·Δr``, ``Δt = e_t·Δr``)."""
+    (nx, ny), (tx, ty) = hand_axes(theta_h)
+    dx, dy, dtheta = np.asarray(twist_world, dtype=float).tolist()
+    return np.array((nx * dx + ny * dy, tx * dx + ty * dy, dtheta))
 
 
 def shift_torque(wrench_world: ArrayLike, from_point: ArrayLike, to_point: ArrayLike) -> Array:

@@ -1,5 +1,5 @@
 """Goal slides end `rolled` when the hand leaves flush contact, and a slide is reached only when the
-object truly did it: the `paper` goals on the paper triangle and pentagon (planar plant, seed 0),
+object truly did it: the `paper` goals on the paper triangle, pentagon and hexagon (planar plant, seed 0),
 judged by the simulator's truth.
 
 The planner tries ground slides where the statics the estimate knows allow them while its hand
@@ -7,7 +7,10 @@ friction is still a lower bound; on the triangle at 2.7° the hand ended up on t
 slides had the `rolled` ending, the hand stayed there for 2.5 s, then rolled and slid 10 mm on the
 face, and the kinematics (which take the hand as flush) read that as the ground slide: `reached`,
 with the true ground contact unmoved. Since the ground hull's faces are held above the origin the
-triangle's ground slides all slide; the pentagon's run still ends three of its seven `rolled`.
+triangle's ground slides all slide. Which slides of the other objects end `rolled` changes with the
+smallest perturbation of a run (a change of rounding in the impedance target's step took the
+pentagon's three to none and left the hexagon's two), so the `rolled` slides are checked over the
+pentagon's and the hexagon's runs together.
 """
 
 from __future__ import annotations
@@ -33,8 +36,8 @@ def result() -> closed_loop.RunResult:
 
 
 @pytest.fixture(scope="module")
-def pentagon() -> closed_loop.RunResult:
-    return paper_goals("paper-pentagon")
+def others() -> list[closed_loop.RunResult]:
+    return [paper_goals("paper-pentagon"), paper_goals("paper-hexagon")]
 
 
 def window(result: closed_loop.RunResult, step: closed_loop.StepResult) -> slice:
@@ -62,16 +65,15 @@ EDGE_SHARE = 0.75
 half-length (the estimate calls a hand whose torque nears its limit maybe rolling)."""
 
 
-def test_a_goal_slide_that_ends_rolled_truly_had_the_hand_at_or_over_its_edge(pentagon):
+def test_a_goal_slide_that_ends_rolled_truly_had_the_hand_at_or_over_its_edge(others):
     """Each `rolled` slide: by the truth, the hand was off flush or its centre of pressure was in the
     outer quarter of the hand, and the roll did not pass for the slide: the estimated coordinate
     moved no further the slide's way than the true one, to the slide's 2 mm tolerance. (A slide may
     truly happen and the hand roll at its end: the pentagon's ground slide at 35°, the tilt a pivot
     that rolled had turned it to, slid the ground 9.0 mm, 8.2 mm by the estimate, and ended `rolled`.)"""
-    result = pentagon
-    rolled = [step for step in goal_slides(result) if step.status == "rolled"]
+    rolled = [(result, step) for result in others for step in goal_slides(result) if step.status == "rolled"]
     assert rolled
-    for step in rolled:
+    for result, step in rolled:
         span = window(result, step)
         geometry = np.asarray(result.samples["true_modes"])[span, 1]
         wrench = np.asarray(result.samples["true_hand_wrench"])[span]
