@@ -892,11 +892,15 @@ class _Loop:
             self.plant.set_target(self.target, self.velocity)
 
     def _finish(self, wall: float) -> RunResult:
-        tracker = self.tracker
+        tracker, now = self.tracker, self.plant.time
+        why = f"the run ended: {self.status}{': ' + self.message if self.message else ''}"
         if tracker.goal is not None:  # the run ended inside a goal
-            why = f"the run ended: {self.status}{': ' + self.message if self.message else ''}"
-            tracker.goal_results.append(tracker.goal.end(self.plant.time, "failed", why))
+            tracker.goal_results.append(tracker.goal.end(now, "failed", why))
             tracker.goal = None
+        for index in range(max(tracker.index + 1, 0), len(tracker.steps)):  # goals it never began
+            item = tracker.steps[index]
+            if isinstance(item, Goal):
+                tracker.goal_results.append(GoalResult(index, item, now, now, "failed", f"not begun: {why}"))
         result = RunResult(
             steps=tuple(self.tracker.results),
             samples={key: np.stack(values) for key, values in self.samples.items()},

@@ -6,7 +6,7 @@ import pytest
 from ccopt import closed_loop, metrics, record
 from ccopt.objects import make_object
 from ccopt.plant.sensors import SensorParams, parse_fault
-from ccopt.schedule import load_schedule
+from ccopt.schedule import Goal, load_schedule
 
 
 @pytest.fixture(scope="module")
@@ -71,6 +71,28 @@ def test_an_interrupted_run_keeps_its_record(tmp_path):
     assert kept.meta["status"] == "interrupted"
     assert 0.75 < kept["time"][-1] < 0.9
     assert len(kept["time"]) == len(kept["true_coordinates"])
+
+
+def test_a_run_that_ends_early_reports_every_goal_it_never_began(tmp_path):
+    """Interrupted in the exploration, before its first goal: every goal step of the schedule has a
+    result, in the schedule's order, ``failed`` as not begun (a study that counts the results would
+    otherwise leave them out of its denominators), and the record's ``meta.json`` has them too."""
+    schedule = load_schedule("paper")
+    goal_indices = [k for k, item in enumerate(schedule.steps) if isinstance(item, Goal)]
+    assert goal_indices and goal_indices[0] > 0
+
+    def interrupt(sim_time, index, total):
+        if sim_time > 0.5:
+            raise KeyboardInterrupt
+
+    result = closed_loop.run(
+        make_object("paper-triangle"), schedule, seed=0, out=tmp_path / "run", on_tick=interrupt
+    )
+    assert result.interrupted
+    assert [goal.index for goal in result.goals] == goal_indices
+    assert all(goal.status == "failed" and goal.reason.startswith("not begun") for goal in result.goals)
+    kept = record.load_record(tmp_path / "run")
+    assert [goal["index"] for goal in kept.meta["goals"]] == goal_indices
 
 
 def test_bad_loop_parameters_raise():
