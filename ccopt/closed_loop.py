@@ -574,9 +574,16 @@ ROLL_TIME = 0.15
 hand is classified flush, while the paper square pressed flat on its face rolled the hand within
 0.1 s of the tilt where it landed; a ground slide of the paper triangle
 tried at 2.7° with a bold ``μ_h`` kept its hand on the face's end for 2.5 s, then rolled it and
-slid it 10 mm, which the kinematics read as the ground sliding). Meanwhile a slide's target holds
-still (:attr:`_StepTracker.rolling`): pushed on, a hand that rolled on the paper pentagon's face in
-a hand slide ran 4.5 mm along it on its edge before the roll was confirmed. An exploration's
+slid it 10 mm, which the kinematics read as the ground sliding). Meanwhile the target of a slide,
+and of a goal's pivot, holds still (:attr:`_StepTracker.rolling`): pushed on, a hand that rolled on
+the paper pentagon's face in a hand slide ran 4.5 mm along it on its edge before the roll was
+confirmed, and a goal's pivot that landed the paper square or rectangle on a face (at 30°/s) turned
+the hand 5.3–5.7° against it, the pivot back within the limit as much again (with the target held:
+1.5–1.9° and 0.6–1.7°, under the 2° the metrics count as a slip). Not an exploration's pivot: it
+may begin with the torque at the hand's limit (the controller pivots about a guessed point until
+the kinematics are known), and held there the hand kept pressing towards the target ahead of it
+until the pivot ended ``rolled`` with the object still turning (random tours at the bar: 27 → 15
+of 50). An exploration's
 hand-slide probe the torque limit stops before the hand slides ends so too
 (:func:`ccopt.schedule.exploration`): without it, the probe of a small heavy random triangle pushed
 for its whole 3 s timeout and rolled the hand 2.3° against the object. A schedule's other motions,
@@ -809,8 +816,8 @@ class _Loop:
         coordinates = tracker.update(self.now, estimate, hand_pose)
         if tracker.done:
             return
-        if tracker.rolling and tracker.step.motion in modes.SLIDES:
-            self.velocity = np.zeros(3)  # a slide whose hand rolls: pushed on, the roll runs along the face
+        if tracker.rolling and (tracker.step.motion in modes.SLIDES or not tracker.step.explore):
+            self.velocity = np.zeros(3)  # pushed on, the hand would roll on (ROLL_TIME)
             return
         if coordinates is None:  # the estimate is unusable: hold where the command says
             coordinates = tracker.command.targets

@@ -10,9 +10,10 @@ start, the planner's reach left no tilt with margin and the goal was reported un
 the experimenter's oracle reaches it; and the slide the planner then tried where the object lay,
 at −24.4°, rolled the hand.
 
-The pivot that finds the tipping point rolls the hand on the face by about 3° before it ends (the
-roll is how it is found), and the hand slips 4 mm in its wake: unintended slips by the metrics,
-not asserted here.
+The pivot that finds the tipping point rolls the hand on the face before it ends (the roll is how
+it is found): by 0.8° on this triangle, with the pivot's target held from the first tight sample
+(1.8° without). Where the object lands on a face, the paper square and rectangle, no goal motion
+may turn the hand against it by the 2° the metrics count as a slip.
 """
 
 from __future__ import annotations
@@ -22,8 +23,9 @@ import math
 import numpy as np
 import pytest
 
-from ccopt.closed_loop import ROLL_TIME, LoopParams, start_config
+from ccopt.closed_loop import LoopParams, start_config
 from ccopt.experiment import run_experiment
+from ccopt.metrics import SLIP_ANGLE
 from ccopt.objects import from_vertices, make_object
 from ccopt.planning.tour import vertex_range
 from ccopt.schedule import Schedule, exploration, reach
@@ -59,31 +61,29 @@ def test_the_goal_past_a_tipping_pivot_is_reached_by_truth(done) -> None:
     assert abs(back["true_error"]["theta_deg"]) <= math.degrees(GOALS[1].angle_tolerance)
 
 
-@pytest.fixture(scope="module")
-def flat():
-    obj = make_object("paper-square")
+@pytest.fixture(scope="module", params=["paper-square", "paper-rectangle"])
+def flat(request):
     schedule = Schedule("flat", (*exploration(), reach(theta_deg=-5.0)))
-    return run_experiment(obj, schedule, LoopParams(), seed=0)
+    return run_experiment(make_object(request.param), schedule, LoopParams(), seed=0)
 
 
-def test_a_pivot_onto_a_face_ends_soon_after_the_hand_rolls_and_is_not_tried_again(flat) -> None:
-    """The paper square asked for −5° lies flat on its face at 0°. By the truth, the goal pivot
-    that lands it ends within ``ROLL_TIME`` + 0.1 s of the hand rolling 1° against the object
-    (counted on the classifier's held report it ended 0.37 s after), at most one other goal motion
-    (the pivot back within the limit) turns the hand 2° against the object (before the limit was
-    where the roll began, five did), and the goal is unreachable, as the oracle says."""
+def test_a_pivot_onto_a_face_ends_rolled_before_the_hand_slips(flat) -> None:
+    """The paper square and rectangle asked for −5° lie flat on a face at 0°. The goal pivot that
+    lands the object ends ``rolled``; its target holds still from the first tight sample, so by the
+    truth no goal motion turns the hand against the object by :data:`ccopt.metrics.SLIP_ANGLE` (the
+    landing pivot pressed on for ``ROLL_TIME`` and turned it 5.3–5.7°, the pivot back within the
+    limit 4.2–5.6°: two unintended slips a run), the run has no unintended slip, and the goal is
+    unreachable, as the oracle says."""
     data = flat.result.samples
     time = np.asarray(data["time"])
     relative = np.asarray(data["true_coordinates"])[:, 0] - np.asarray(data["true_hand_pose"])[:, 2]
-    rolls = 0
-    for step in (s for s in flat.result.steps if s.goal is not None):
+    goal_steps = [s for s in flat.result.steps if s.goal is not None]
+    assert any(s.kind == "pivot" and s.status == "rolled" for s in goal_steps)
+    for step in goal_steps:
         begin = int(np.searchsorted(time, step.start_time))
         end = min(int(np.searchsorted(time, step.end_time)), len(time) - 1)
         turned = np.abs(relative[begin : end + 1] - relative[begin])
-        rolls += bool(turned.max() > math.radians(2.0))
-        if step.status == "rolled":
-            first = time[begin + int(np.argmax(turned > math.radians(1.0)))]
-            assert step.end_time - first <= ROLL_TIME + 0.1, (step, first)
-    assert 1 <= rolls <= 2
+        assert turned.max() < SLIP_ANGLE, (step, math.degrees(turned.max()))
+    assert flat.summary["unintended_slips"] == 0
     (goal,) = flat.summary["goals"]
     assert goal["status"] == "unreachable" and not goal["oracle"]["reachable"]
