@@ -583,8 +583,7 @@ the hand 5.3–5.7° against it, the pivot back within the limit as much again (
 may begin with the torque at the hand's limit (the controller pivots about a guessed point until
 the kinematics are known), and held there the hand kept pressing towards the target ahead of it
 until the pivot ended ``rolled`` with the object still turning (random tours at the bar: 27 → 15
-of 50). An exploration's
-hand-slide probe the torque limit stops before the hand slides ends so too
+of 50). An exploration's hand-slide probe the torque limit stops before the hand slides ends so too
 (:func:`ccopt.schedule.exploration`): without it, the probe of a small heavy random triangle pushed
 for its whole 3 s timeout and rolled the hand 2.3° against the object. A schedule's other motions,
 which the truth scores, do not end ``rolled``: the report is conservative (a torque near the hand's

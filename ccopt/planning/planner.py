@@ -182,11 +182,17 @@ def back_within(theta: float, reach: tuple[float, float], params: PlannerParams)
     a face past the reach: no statics of the vertex hold there (a ground slide tried on a random
     triangle lying on its face at −24.4° rolled the hand, and its failure then barred slides at
     every tilt the vertex allowed)."""
-    low, high = reach
-    inside = min(max(theta, low), high)
-    if abs(inside - theta) <= DEFAULT_TOLERANCE["pivot"]:
+    beyond = past_reach(theta, reach)
+    if abs(beyond) <= DEFAULT_TOLERANCE["pivot"]:
         return None
-    return Plan("move", _step("pivot", inside - theta, params))
+    return Plan("move", _step("pivot", -beyond, params))
+
+
+def past_reach(theta: float, reach: tuple[float, float]) -> float:
+    """How far (rad) the tilt ``theta`` lies beyond ``reach = (low, high)``: positive above ``high``,
+    negative below ``low``, 0 within."""
+    low, high = reach
+    return theta - min(max(theta, low), high)
 
 
 def _towards_ground(

@@ -43,7 +43,7 @@ import numpy as np
 from ccopt.control.targets import TargetGoal, estimated_statics, seeks_friction
 from ccopt.estimation.estimator import Estimate
 from ccopt.modes import Motion
-from ccopt.planning.planner import Plan, PlannerParams, StaticsOf, back_within, next_motion
+from ccopt.planning.planner import Plan, PlannerParams, StaticsOf, back_within, next_motion, past_reach
 from ccopt.schedule import Goal, Step, exploration
 from ccopt.statics import ObjectStatics
 
@@ -222,9 +222,7 @@ class GoalSequencer:
         past it onto another vertex, where no planned motion was possible any more."""
         if step.kind != "pivot" or not math.isfinite(theta):
             return step
-        low, high = self._reach()
-        end = theta + step.delta
-        if low - step.tolerance <= end <= high + step.tolerance:
+        if abs(past_reach(theta + step.delta, self._reach())) <= step.tolerance:
             return step
         return dataclasses.replace(step, delta=-step.delta)
 
