@@ -351,3 +351,55 @@ def test_an_exploration_pivot_past_a_tilt_limit_turns_the_other_way() -> None:
         beyond = -19.0 + math.degrees(planned.delta) < -20.0 - math.degrees(planned.tolerance)
         assert step.delta == (-planned.delta if beyond else planned.delta)
     assert any(step.delta != planned.delta for step, planned in zip(steps, exploration(), strict=True))
+
+
+def plan_nominally(
+    statics_of, c: Case, goal: Goal, params: PlannerParams, max_motions: int = 40
+) -> tuple[str, list[Step]]:
+    """``next_motion`` from the start with every motion applied nominally: its last status and motions."""
+    where, motions = np.array(start_of(c)), []
+    for _ in range(max_motions):
+        plan = next_motion(statics_of, tuple(where), goal, 0.0, c.reach, c.lever, FORCES, params,
+                           face=c.truth.s_h_range)
+        if plan.status != "move":
+            return plan.status, motions
+        motions.append(plan.motion)
+        where[plan.motion.coordinate] += plan.motion.delta
+    return "unreachable", motions
+
+
+@pytest.mark.parametrize("name", ["triangle", "square", "heavy-triangle", "random-triangle"])
+def test_a_hand_slide_judged_on_a_friction_interval_keeps_the_margin_at_both_ends(
+    cases: dict[str, Case], name: str
+) -> None:
+    """A hand slide judged under two statics, the true ones and the same with μ_h 1.0 (what an
+    estimate knows before the hand slides: a lower bound and a ceiling), keeps the margin under each
+    (direct LPs at the points it passes), and a goal reached so is reached on the true statics alone.
+    On the heavy and the random triangle the interval's plans go to other tilts than the truth's
+    alone, with more motions (the case it guards): the slide the truth alone takes first would not
+    keep the margin at μ_h 1.0."""
+    c = cases[name]
+    params = PlannerParams()
+    ceiling = dataclasses.replace(c.truth.statics, mu_h=1.0)
+    hand = (Motion.SLIDE_HAND_POS, Motion.SLIDE_HAND_NEG)
+
+    def interval(motion: Motion):
+        return (c.truth.statics, ceiling) if motion in hand else c.truth.statics
+
+    stricter = []
+    for sign in (1, -1):
+        goal = Goal(s_h=c.truth.s_h + sign * params.hand_slide)
+        status, motions = plan_nominally(interval, c, goal, params)
+        alone, direct = plan_nominally(lambda motion: c.truth.statics, c, goal, params)
+        assert status != "reached" or alone == "reached"
+        stricter.append(len(motions) > len(direct))
+        where = np.array(start_of(c))
+        for step in motions:
+            motion = motion_of(step.kind, step.delta)
+            for known in (c.truth.statics, ceiling) if step.kind == "slide_hand" else (c.truth.statics,):
+                for theta, s_h in passed_points(step, where, params.s_h_step):
+                    margin = statics.best_wrench(known, theta, s_h, motion, c.lever, FORCES).margin
+                    assert margin >= params.margin - 1e-6, (step, known.mu_h, margin)
+            where[step.coordinate] += step.delta
+    if name in ("heavy-triangle", "random-triangle"):
+        assert any(stricter)

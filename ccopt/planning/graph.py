@@ -87,12 +87,32 @@ class Edge:
     margin: float
 
 
+Statics = ObjectStatics | tuple[ObjectStatics, ...]
+"""The statics a motion is judged on: one, or several that it must hold under alike (the hand
+friction at both ends of what an estimate knows of it, :mod:`ccopt.planning.sequencer`)."""
+
+
+def least_margin(
+    known: Statics,
+    theta_o: float,
+    s_h: float,
+    motion: Motion,
+    lever: float,
+    force_limits: tuple[float, float],
+) -> float:
+    """The smallest of the largest margins (N) of ``motion`` at ``(θ_o, s_h)`` under every statics of
+    ``known`` (:func:`ccopt.statics.best_wrench`)."""
+    every = known if isinstance(known, tuple) else (known,)
+    return min(statics.best_wrench(k, theta_o, s_h, motion, lever, force_limits).margin for k in every)
+
+
 class ConfigurationGraph:
     """The motions the statics ``known`` allow around ``(θ_start, s_h_start)``.
 
     Args:
         known: the object's statics (true or estimated), or per motion (an estimate knows a ground
-            row differently for a motion that keeps the ground and one that slides it across).
+            row differently for a motion that keeps the ground and one that slides it across), each
+            one statics or several a motion must hold under alike (:data:`Statics`).
         start: ``(θ_o, s_h)`` of the grid's origin node, rad and m.
         lever: the torque rows' lever ``l_h`` (m) and ``force_limits`` ``(f_min, f_max)`` (N).
         params: grid and margin.
@@ -101,7 +121,7 @@ class ConfigurationGraph:
 
     def __init__(
         self,
-        known: ObjectStatics | Callable[[Motion], ObjectStatics],
+        known: Statics | Callable[[Motion], Statics],
         start: tuple[float, float],
         lever: float,
         force_limits: tuple[float, float],
@@ -145,8 +165,7 @@ class ConfigurationGraph:
         if key not in self._margins:
             theta, s_h = self.configuration(node)
             known = self.known(motion) if callable(self.known) else self.known
-            result = statics.best_wrench(known, theta, s_h, motion, self.lever, self.force_limits)
-            self._margins[key] = result.margin
+            self._margins[key] = least_margin(known, theta, s_h, motion, self.lever, self.force_limits)
         return self._margins[key]
 
     def edges(self, node: Node) -> Iterator[Edge]:

@@ -37,9 +37,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ccopt import statics
 from ccopt.modes import Motion, motion_of
-from ccopt.planning.graph import ConfigurationGraph, Edge, GraphParams, Node
+from ccopt.planning.graph import ConfigurationGraph, Edge, GraphParams, Node, Statics, least_margin
 from ccopt.planning.tour import reachable_nodes
 from ccopt.schedule import DEFAULT_TIMEOUT, DEFAULT_TOLERANCE, PIVOT_STEP, SLIDE_STEP, Goal, Step
 from ccopt.statics import ObjectStatics
@@ -49,9 +48,10 @@ PLAN_STATUSES = ("move", "reached", "unreachable")
 """What a plan says: take :attr:`Plan.motion`; the goal is reached; no sequence reaches it."""
 COORDINATE_NAMES = ("θ_o", "s_h", "s_g")
 
-StaticsOf = Callable[[Motion], ObjectStatics]
+StaticsOf = Callable[[Motion], Statics]
 """The statics a motion is judged on (per motion: an estimate knows a ground row differently for a
-motion that keeps the ground and for one that slides across it)."""
+motion that keeps the ground and for one that slides across it; and a hand slide, before the hand
+has slid, at both ends of what is known of the hand friction)."""
 
 
 @dataclass(frozen=True)
@@ -69,6 +69,9 @@ class PlannerParams:
         aim: the share of a goal's tolerances the plan aims within: the estimate errs by up to a
             millimetre where the truth is (the ground contact after a slide, the run's start), and
             a goal is only reached if the truth is within the whole tolerance.
+        hand_friction_max: the largest hand friction coefficient believed possible. Until the hand
+            has slid, ``μ̂_h`` is only a lower bound (the largest ratio seen sticking): a hand slide
+            is planned as certain only where it keeps the margin at both (:mod:`ccopt.planning.sequencer`).
     """
 
     margin: float = 1.0
@@ -79,6 +82,7 @@ class PlannerParams:
     s_h_span: float = 0.02
     motion_timeout: float = DEFAULT_TIMEOUT
     aim: float = 0.5
+    hand_friction_max: float = 1.0
 
     def __post_init__(self) -> None:
         check_number("margin", self.margin, low_open=False)
@@ -86,6 +90,7 @@ class PlannerParams:
             check_number(name, getattr(self, name))
         check_number("s_h_span", self.s_h_span, low_open=False)
         check_number("aim", self.aim, 0.0, 1.0)
+        check_number("hand_friction_max", self.hand_friction_max)
 
 
 @dataclass(frozen=True)
@@ -97,8 +102,9 @@ class Plan:
         motion: the motion to take now (``move``), else None.
         reason: why the goal is unreachable (one line), else "".
         path: the motions planned from here (the first is ``motion``, partial moves aside).
-        explores: whether the plan relies on statics bolder than the estimate's (the hand friction
-            one step beyond ``μ̂_h``).
+        explores: whether ``motion`` is a probe: the plan relies on statics bolder than the
+            estimate's (the hand friction one step beyond ``μ̂_h``), or ``motion`` is a hand slide
+            the estimate cannot make certain (:mod:`ccopt.planning.sequencer`).
     """
 
     status: str
@@ -295,7 +301,7 @@ def _closing_margin(
         known = statics_of(motion)
         end = (theta + delta, s_h) if kind == "pivot" else (theta, s_h + delta)
         for point in ((theta, s_h), end):
-            least = min(least, statics.best_wrench(known, *point, motion, lever, force_limits).margin)
+            least = min(least, least_margin(known, *point, motion, lever, force_limits))
         theta, s_h = end
     return least
 

@@ -9,11 +9,16 @@ answers, every time a motion ends, with the next motion or with how the goal end
   pivots run again, which find the ground contact and ``s_h`` anew (at most
   :attr:`GoalSequencer.max_explorations` explorations per goal);
 * **move** — :func:`ccopt.planning.planner.next_motion` on the statics the estimate knows *now*
-  (:func:`ccopt.control.targets.estimated_statics`, per motion), from the estimated configuration;
-  where that finds no sequence and the hand has not yet slid, again with the hand friction one
-  step beyond ``μ̂_h`` (the estimate is a lower bound: the controller explores it on the way);
-* a motion that explores — on the hand friction one step beyond ``μ̂_h``, or a ground slide towards a
-  side whose friction face is not yet known (sought past the sticking forces seen) — is a probe
+  (:func:`ccopt.control.targets.estimated_statics`, per motion), from the estimated configuration.
+  Until the hand has slid, ``μ̂_h`` is a lower bound, optimistic for a hand slide: a hand slide is
+  certain only where it keeps its margin at both ``μ̂_h`` and
+  :attr:`~ccopt.planning.planner.PlannerParams.hand_friction_max`. Where no plan is certain, the
+  planner tries the friction midway between them, then ``μ̂_h`` alone, and such a plan's first hand
+  slide is a probe. Where that finds no sequence either, it plans again with the hand friction one
+  step beyond ``μ̂_h`` (the controller explores it on the way);
+* a motion that explores — an uncertain hand slide (above), a motion on the hand friction one step
+  beyond ``μ̂_h``, or a ground slide towards a side whose friction face is not yet known (sought
+  past the sticking forces seen) — is a probe
   (``Step.explore``): it looks for a limit that may not be where it is sought, and its realised
   change is not scored as a commanded motion's;
 * ``reached`` — every given coordinate is within its tolerance, by the estimate;
@@ -43,9 +48,9 @@ import numpy as np
 from ccopt.control.targets import TargetGoal, estimated_statics, seeks_friction
 from ccopt.estimation.estimator import Estimate
 from ccopt.modes import Motion
+from ccopt.planning.graph import Statics
 from ccopt.planning.planner import Plan, PlannerParams, StaticsOf, back_within, next_motion, past_reach
 from ccopt.schedule import Goal, Step, exploration
-from ccopt.statics import ObjectStatics
 
 GOAL_STATUSES = ("reached", "unreachable", "timeout", "failed")
 """How a goal can end (see the module docstring)."""
@@ -188,9 +193,9 @@ class GoalSequencer:
         f_min, f_max = self.aim.force_limits
         forces = (f_min, f_max - self.aim.headroom)
 
-        def plan_with(mu_h: float | None) -> Plan:
+        def plan_with(mu_h: float | None, hand_ceiling: float | None = None) -> Plan:
             return next_motion(
-                _statics_of(estimate, mu_h, self.aim.push),
+                _statics_of(estimate, mu_h, self.aim.push, hand_ceiling),
                 where,
                 self.goal,
                 s_g_origin,
@@ -201,8 +206,18 @@ class GoalSequencer:
                 failed_slides=self.failed_slides,
             )
 
-        plan = plan_with(None)
-        if plan.status != "unreachable" or estimate.hand_slid or self.aim.friction_step <= 0.0:
+        if estimate.hand_slid:
+            return plan_with(None)
+        ceiling = max(self.params.hand_friction_max, estimate.mu_h)
+        sure = plan_with(None, ceiling)
+        if sure.status != "unreachable":
+            return sure
+        likely = plan_with(None, 0.5 * (estimate.mu_h + ceiling))
+        plan = likely if likely.status == "move" else plan_with(None)
+        if plan.status == "move":
+            guess = plan.motion.kind == "slide_hand"  # the first hand slide is a probe of μ_h
+            return dataclasses.replace(plan, explores=guess)
+        if self.aim.friction_step <= 0.0:
             return plan
         bolder = plan_with(estimate.mu_h + self.aim.friction_step)
         if bolder.status != "move":
@@ -258,20 +273,24 @@ def _usable(estimate: Estimate) -> bool:
     return bool(estimate.kinematics_valid) and all(map(math.isfinite, values))
 
 
-def _statics_of(estimate: Estimate, mu_h: float | None, push: float) -> StaticsOf:
+def _statics_of(
+    estimate: Estimate, mu_h: float | None, push: float, hand_ceiling: float | None = None
+) -> StaticsOf:
     """The estimated statics per motion (at the current hand angle's gravity moment where no model
     is estimated yet), with the hand friction ``mu_h`` if given and a ground slide sought ``push`` (N)
     past the sticking forces seen where its friction face is not known
-    (:func:`ccopt.control.targets.estimated_statics`)."""
-    cache: dict[Motion, ObjectStatics] = {}
+    (:func:`ccopt.control.targets.estimated_statics`); a hand slide, where ``hand_ceiling`` is given,
+    under that hand friction as well (the hand friction is known only to lie between them)."""
+    cache: dict[Motion, Statics] = {}
     angle = float(estimate.theta_o)
 
-    def statics_of(motion: Motion) -> ObjectStatics:
+    def statics_of(motion: Motion) -> Statics:
         if motion not in cache:
             known = estimated_statics(estimate, angle, mu_h, motion, push)
             if known is None:
                 raise ValueError("the estimate cannot judge the statics")
-            cache[motion] = known
+            sliding = hand_ceiling is not None and motion in (Motion.SLIDE_HAND_POS, Motion.SLIDE_HAND_NEG)
+            cache[motion] = (known, dataclasses.replace(known, mu_h=hand_ceiling)) if sliding else known
         return cache[motion]
 
     return statics_of
