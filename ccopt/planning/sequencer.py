@@ -47,7 +47,7 @@ import numpy as np
 
 from ccopt.control.targets import TargetGoal, estimated_statics, seeks_friction
 from ccopt.estimation.estimator import Estimate
-from ccopt.modes import Motion
+from ccopt.modes import Motion, kind_of
 from ccopt.planning.graph import Statics
 from ccopt.planning.planner import Plan, PlannerParams, StaticsOf, back_within, next_motion, past_reach
 from ccopt.schedule import Goal, Step, exploration
@@ -289,7 +289,7 @@ def _statics_of(
             known = estimated_statics(estimate, angle, mu_h, motion, push)
             if known is None:
                 raise ValueError("the estimate cannot judge the statics")
-            sliding = hand_ceiling is not None and motion in (Motion.SLIDE_HAND_POS, Motion.SLIDE_HAND_NEG)
+            sliding = hand_ceiling is not None and kind_of(motion) == "slide_hand"
             cache[motion] = (known, dataclasses.replace(known, mu_h=hand_ceiling)) if sliding else known
         return cache[motion]
 
