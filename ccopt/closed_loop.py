@@ -852,8 +852,9 @@ class _Loop:
         a statics period (:attr:`LoopParams.statics_hz`) has passed, else the last one."""
         now, last = self.now, self.last_aim
         if self.tracker.fresh or last is None or now - last[0] >= self.statics_period - 1e-9:
-            motion = self.tracker.command.motion
-            self.last_aim = (now, statics_target(estimate, float(hand_pose[2]), motion, self.goal))
+            motion, tracker = self.tracker.command.motion, self.tracker
+            planned = tracker.goal is not None and not tracker.step.explore
+            self.last_aim = (now, statics_target(estimate, float(hand_pose[2]), motion, self.goal, planned))
         return self.last_aim[1]
 
     def _ruled_out(self, aim: StaticsTarget, estimate: Estimate, hand_pose: np.ndarray) -> str:

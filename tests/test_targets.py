@@ -319,6 +319,76 @@ def test_a_motion_with_a_wrench_is_never_ruled_out(theta_o, s_h, motion):
     assert target.margin >= floor - 1e-6
 
 
+# --- a goal's hand slide once the hand has slid ---------------------------------------------------
+
+# Heavy objects whose hand slide's margin peaks inside the force limits (flush hand at θ_o = 0).
+HEAVY = statics.ObjectStatics.of_model(0.6, 0.5, 2.0, 0.03, 0.01, 0.02)
+WIDE = statics.ObjectStatics.of_model(0.6, 0.5, 1.0, 0.06, -0.02, 0.02)
+
+
+def hand_slide_margins(truth: statics.ObjectStatics, motion: Motion, forces: np.ndarray) -> np.ndarray:
+    """A hand slide's wrench is set by ``f_n`` alone: ``f_t = ∓μ_h f_n`` on the removed row (+s_h:
+    the hand pushes the object's face back, −), ``τ`` from the moment balance about the ground contact
+    (:func:`equilibrium_wrench`); its margin at each force, the smallest kept-row margin."""
+    sign = -1.0 if motion is Motion.SLIDE_HAND_POS else 1.0
+    margins = []
+    for f_n in forces:
+        f_t = sign * truth.mu_h * f_n
+        wrench = np.array([f_n, f_t, truth.d * f_t - truth.gravity(0.0)])
+        margins.append(wrench_margin(truth, 0.0, motion, wrench))
+    return np.array(margins)
+
+
+@pytest.mark.parametrize(
+    ("truth", "motion"),
+    [(HEAVY, Motion.SLIDE_HAND_POS), (WIDE, Motion.SLIDE_HAND_NEG)],
+    ids=["heavy_pos", "wide_neg"],
+)
+def test_a_planned_hand_slide_holds_its_largest_margin_once_the_hand_slid(truth, motion):
+    """Once the hand has slid, a goal's planned hand slide holds the normal force of the largest
+    margin, found here by a scan of the force (0.01 N steps, the wrench written out): inside the
+    limits, away from the nominal force. A probe, or any hand slide before the hand slid, keeps the
+    nominal rule: the force nearest the nominal one at the goal's margin."""
+    forces = np.linspace(*LIMITS, 2201)
+    margins = hand_slide_margins(truth, motion, forces)
+    peak = forces[margins.argmax()]
+    assert LIMITS[0] + 1.0 < peak < LIMITS[1] - 1.0 and abs(peak - GOAL.nominal_force) > 1.5
+    assert margins.max() > GOAL.margin + 1.0
+    slid = dataclasses.replace(known_estimate(truth, 0.0, 0.0, model_gravity=True), hand_slid=True)
+    target = statics_target(slid, 0.0, motion, GOAL, planned=True)
+    assert target.force == pytest.approx(peak, abs=0.011)
+    held = hand_slide_margins(truth, motion, np.array([target.force]))[0]
+    assert target.margin == pytest.approx(held, abs=1e-6)  # the margin of the wrench held
+    assert held >= margins.max() - 1e-9  # no force of the scan does better
+    for estimate, planned in ((slid, False), (dataclasses.replace(slid, hand_slid=False), True)):
+        nominal = statics_target(estimate, 0.0, motion, GOAL, planned=planned)
+        assert_target_is(nominal, regulation(truth, 0.0, 0.0, motion))
+        assert nominal.margin == pytest.approx(GOAL.margin, abs=1e-5)
+
+
+@pytest.mark.parametrize(("theta_o", "push"), [(0.0, 1.5), (0.15, 6.0), (0.4, 6.0)])
+def test_a_slide_sought_past_the_forces_seen_falls_back_to_their_edge_where_the_push_has_no_margin(
+    theta_o, push
+):
+    """A ground slide across a side not known is sought ``push`` N past the sticking forces seen;
+    where no wrench there keeps a margin (the true object's LP on the pushed row, written out with
+    ``statics.regulation_wrench``), the target is the regulation wrench on the edge itself (here the
+    true row: the estimate's hull is the true face), with its margin; where one does, the pushed one
+    (the same LPs on inputs rounded differently: 1e-6 N)."""
+    motion, goal = Motion.SLIDE_GROUND_POS, dataclasses.replace(GOAL, push=push)
+    estimate = known_estimate(OBJECT, theta_o, 0.0, model_gravity=True, fitted=(False, False))
+    bounds = OBJECT.ground_bounds + np.array([push, 0.0])
+    pushed_truth = dataclasses.replace(OBJECT, ground_bounds=bounds)
+    pushed = regulation(pushed_truth, theta_o, 0.0, motion)
+    target = statics_target(estimate, theta_o, motion, goal)
+    if pushed.margin < 0.0:
+        at_edge = regulation(OBJECT, theta_o, 0.0, motion)
+        assert at_edge.margin > 0.0
+        assert_target_is(target, at_edge, abs_tol=1e-6)
+    else:
+        assert_target_is(target, pushed, abs_tol=1e-6)
+
+
 # --- exploring the hand friction ------------------------------------------------------------------
 
 # An object a ground slide needs more hand friction than μ̂_h for: the hand pushes sideways by
