@@ -31,11 +31,11 @@ what the errors of ``μ̂_h``, ``M̂`` and ``ŝ_h`` move it. On the paper rectan
 at ``f_n`` ≈ 11 N, where the true margin was 1.5–2.3 N (4.4 N at its best), and rolled halfway; on
 the heavy triangle the true margin was positive only near 3 N, and the controller held 6–7 N. So
 once the hand has slid (``μ̂_h`` measured), a goal's planned hand slide (``planned``: not a probe)
-holds the wrench of the largest estimated margin. Paper study over three seeds: trials whose
-hand-slide ratio is within its band 17 → 22 of 30, unintended slips 11 → 10; goals study
-unchanged or better. Probes keep the nominal rule (they look for the limit), and so do scripted
-steps: on the robustness tours the largest margin cost three trials (27 → 24 of 50 at the bar:
-slips and unfinished steps) that the nominal rule meets.
+holds the wrench of the largest estimated margin. Paper study over three seeds, with the push
+fallback of :attr:`TargetGoal.push`: trials whose hand-slide ratio is within its band 17 → 20 of
+30, unintended slips 11 → 9; goals study unchanged or better. Probes keep the nominal rule (they
+look for the limit), and so do scripted steps: on the robustness tours the largest margin cost
+three trials (27 → 24 of 50 at the bar: slips and unfinished steps) that the nominal rule meets.
 """
 
 from __future__ import annotations
@@ -183,7 +183,7 @@ def statics_target(
     largest margin once the hand friction is measured (see the module)."""
     kind = modes.kind_of(motion)
     if planned and kind == "slide_hand" and estimate.hand_slid:
-        goal = dataclasses.replace(goal, margin=math.inf)
+        goal = dataclasses.replace(goal, margin=math.inf)  # no margin goal short of the best
     push = goal.push if kind == "slide_ground" else 0.0
     known = estimated_statics(estimate, hand_angle, motion=motion, push=push)
     target = _target(known, estimate, hand_angle, motion, goal)
@@ -202,6 +202,7 @@ def statics_target(
 
 
 def _margin_of(target: StaticsTarget) -> float:
+    """A target's margin for comparison (an unjudged one is the worst)."""
     return target.margin if target.judged else -math.inf
 
 
