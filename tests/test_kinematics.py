@@ -84,6 +84,56 @@ def test_the_contact_compliance_is_estimated_and_removed_from_the_kinematics(see
     assert abs(rotate_with_torque(rigid, np.random.default_rng(seed))[0].d - D) > 3e-3  # what it fixes
 
 
+def rotate_with_torque_steps(estimators, compliance: float, seed: int):
+    """:func:`rotate_with_torque` with the hand tilted by ``compliance · τ``, the same samples fed to
+    each estimator in turn; yields after each sample."""
+    rng = np.random.default_rng(seed)
+    count = 1200
+    angles = np.radians(15.0) * np.sin(np.linspace(0.0, 2.0 * np.pi, count))
+    torques = -1.5 * angles + 0.15 * np.sin(2.0 * np.pi * np.arange(count) / 74.0)
+    for theta, torque in zip(angles, torques, strict=True):
+        pose = geometry.hand_pose_from_contact(theta, S_H, D, R_O) + np.array([0.0, 0.0, compliance * torque])
+        sample = measured(pose, rng)
+        measured_torque = torque + rng.normal(0.0, TORQUE_NOISE)
+        yield [step(estimator, sample, torque=measured_torque) for estimator in estimators]
+
+
+UNCONSTRAINED = KinematicsParams(compliance_min=-1.0)
+
+
+def test_a_hand_that_tilts_against_its_torque_is_not_taken_for_a_negative_compliance():
+    """A pad tilts with the torque: a stream whose hand tilts against it (what a model error looks
+    like to the filter) leaves the unconstrained estimate at the negative slope, the default one at 0."""
+    bounded, free = KinematicEstimator(L_H), KinematicEstimator(L_H, UNCONSTRAINED)
+    for estimates in rotate_with_torque_steps((bounded, free), -COMPLIANCE, 0):
+        assert estimates[0].compliance >= 0.0
+    assert abs(estimates[1].compliance + COMPLIANCE) < 0.004  # the stream does push it below 0
+    assert estimates[0].compliance == 0.0
+
+
+def test_the_bound_projects_the_state_along_its_covariance():
+    """At the first sample where the unconstrained update crosses ``c = 0``, the bounded state is its
+    covariance-weighted projection ``x − P e_c c / P_cc`` (closed form, NumPy), ``P`` the same."""
+    bounded, free = KinematicEstimator(L_H), KinematicEstimator(L_H, UNCONSTRAINED)
+    for _ in rotate_with_torque_steps((bounded, free), -COMPLIANCE, 1):
+        state, cov = np.array(free._state), np.array(free._cov)
+        if state[4] < 0.0:
+            break
+        np.testing.assert_array_equal(bounded._state, state)  # the bound inactive: the same filter
+    else:
+        pytest.fail("the unconstrained compliance never went below 0")
+    projected = state - cov[:, 4] / cov[4, 4] * state[4]
+    np.testing.assert_allclose(bounded._state, projected, rtol=0.0, atol=1e-15)
+    assert bounded._state[4] == 0.0
+    np.testing.assert_array_equal(np.array(bounded._cov), cov)
+
+
+def test_a_compliance_prior_below_the_bound_is_refused():
+    with pytest.raises(ValueError, match="compliance_prior"):
+        KinematicsParams(compliance_prior=-0.01)
+    assert KinematicsParams(compliance_prior=-0.01, compliance_min=-0.1).compliance_prior == -0.01
+
+
 NORMAL_COMPLIANCE = 1e-4  # m/N: the face sinks towards the ground contact by k f_n
 
 

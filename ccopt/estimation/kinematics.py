@@ -27,6 +27,15 @@ known, half that). A wrench that varies at a fixed angle (e.g. the normal force,
 by ``s_h Δf_n``) pins ``c`` down. ``c`` survives a reset (it belongs to the contact, not to the
 configuration); only its correlations are forgotten.
 
+``c`` is a pad's compliance: the hand tilts *with* the torque it exerts, never against it, so
+``c ≥ compliance_min`` (0 by default). Where the confounding above lets a model error pass for a
+negative compliance, the unconstrained filter believed it: on a goals-study triangle whose pivots
+loaded the hand near its end, ``ĉ`` ran to −0.35 rad/(N·m) in about a second of pivoting (the truth
++0.035), and ``θ̂_o = θ_h − ĉ τ`` was 6° off while the kinematics reported themselves valid. An
+update that leaves ``ĉ`` below the bound is projected back onto it (the estimate projection of
+Simon & Chia, 2002: ``x ← x − P e_c (ĉ − c_min) / P_cc``, so the states correlated with ``c`` move
+with it; ``P`` is kept, which stays conservative).
+
 **Normal compliance.** Both contacts also give along the normal: the hand face sinks towards the
 ground contact by ``k f_n`` (the penetrations of the hand and ground contacts; 0.06 mm/N on the
 default plants). At a constant force that is part of ``d``; but the controller changes ``f_n`` with
@@ -134,6 +143,8 @@ class KinematicsParams:
         compliance_prior: the contact's rotational compliance ``c`` before any data (rad/(N·m));
             0 (a rigid contact) unless known, e.g. from an earlier run's estimate.
         compliance_std: its standard deviation before any data (rad/(N·m)).
+        compliance_min: the least compliance the estimate may take (rad/(N·m)): a passive pad
+            tilts with the torque, so 0 (a large negative value leaves it unconstrained).
         normal_compliance_prior: the contacts' normal compliance ``k`` before any data (m/N): how far
             the hand face sinks towards the ground contact per newton of normal force (both contacts'
             penetration; 0.06 mm/N on the default plants).
@@ -175,6 +186,7 @@ class KinematicsParams:
     prior_std: float = 1.0
     compliance_prior: float = 0.0
     compliance_std: float = 0.1
+    compliance_min: float = 0.0
     normal_compliance_prior: float = 0.0
     normal_compliance_std: float = 1e-4
     reference_force: float = 10.0
@@ -192,7 +204,8 @@ class KinematicsParams:
         check_number("excitation_angle", self.excitation_angle, low_open=False)
         check_number("position_noise", self.position_noise)
         check_number("prior_std", self.prior_std)
-        check_number("compliance_prior", self.compliance_prior, low=-math.inf)
+        check_number("compliance_min", self.compliance_min, low=-math.inf)
+        check_number("compliance_prior", self.compliance_prior, low=self.compliance_min, low_open=False)
         check_number("compliance_std", self.compliance_std, low_open=False)
         check_number("normal_compliance_prior", self.normal_compliance_prior, low=-math.inf)
         check_number("normal_compliance_std", self.normal_compliance_std, low_open=False)
@@ -281,6 +294,7 @@ class KinematicEstimator:
         self._reference_force = params.reference_force
         self._excitation_angle = params.excitation_angle
         self._valid_std, self._rough_std = params.valid_std, params.rough_std
+        self._compliance_min = params.compliance_min
         self._state = [0.0, 0.0, 0.0, 0.0, params.compliance_prior, params.normal_compliance_prior]
         self._cov = [[0.0] * _SIZE for _ in range(_SIZE)]
         self._cov[C][C] = params.compliance_std**2
@@ -551,6 +565,12 @@ class KinematicEstimator:
             r[3] -= gain * c3
             r[4] -= gain * c4
             r[5] -= gain * c5
+        below = state[C] - self._compliance_min
+        if below < 0.0:  # project onto c ≥ c_min (see the module docstring)
+            variance_c = self._cov[C][C]
+            for i, row in enumerate(self._cov):
+                state[i] -= row[C] / variance_c * below
+            state[C] = self._compliance_min
 
     def _scalar_update(self, row: _Row, value: float) -> None:
         """Kalman update with one measurement ``row · x = value``, ungated."""
