@@ -106,6 +106,13 @@ def hand_to_world(axes: Axes, n: float, t: float) -> tuple[float, float]:
     return n * nx + t * tx, n * ny + t * ty
 
 
+def world_to_hand(axes: Axes, x: float, y: float) -> tuple[float, float]:
+    """The hand-frame components ``(e_n·v, e_t·v)`` of the world vector ``v = (x, y)``, with ``axes``
+    from :func:`hand_axes` (plain floats; the inverse of :func:`hand_to_world`)."""
+    (nx, ny), (tx, ty) = axes
+    return x * nx + y * ny, x * tx + y * ty
+
+
 def hand_frame(theta_h: float | ca.SX | ca.MX) -> Array | ca.SX | ca.MX:
     """2×2 matrix whose columns are ``e_n`` and ``e_t``: maps hand-frame ``(n, t)`` to world ``(x, y)``."""
     if _is_symbolic(theta_h):
@@ -142,19 +149,18 @@ def hand_force_to_world(theta_h: float, f_n: float, f_t: float) -> Array:
 def twist_hand_to_world(theta_h: float, twist_hand: ArrayLike) -> Array:
     """Hand-frame increment ``(Δn, Δt, Δθ)`` of the hand pose to the world increment ``(Δx, Δy, Δθ)``.
 
-    Written out (``Δr = Δn e_n + Δt e_t``) because the loop calls it every control tick.
+    In floats (:func:`hand_to_world`, ``Δr = Δn e_n + Δt e_t``) because the loop calls it every
+    control tick.
     """
-    (nx, ny), (tx, ty) = hand_axes(theta_h)
     dn, dt, dtheta = np.asarray(twist_hand, dtype=float).tolist()
-    return np.array((nx * dn + tx * dt, ny * dn + ty * dt, dtheta))
+    return np.array((*hand_to_world(hand_axes(theta_h), dn, dt), dtheta))
 
 
 def twist_world_to_hand(theta_h: float, twist_world: ArrayLike) -> Array:
     """World increment ``(Δx, Δy, Δθ)`` of the hand pose to the hand frame ``(Δn, Δt, Δθ)``
     (``Δn = e_n·Δr``, ``Δt = e_t·Δr``)."""
-    (nx, ny), (tx, ty) = hand_axes(theta_h)
     dx, dy, dtheta = np.asarray(twist_world, dtype=float).tolist()
-    return np.array((nx * dx + ny * dy, tx * dx + ty * dy, dtheta))
+    return np.array((*world_to_hand(hand_axes(theta_h), dx, dy), dtheta))
 
 
 def shift_torque(wrench_world: ArrayLike, from_point: ArrayLike, to_point: ArrayLike) -> Array:

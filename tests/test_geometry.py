@@ -33,6 +33,20 @@ def test_wrench_and_twist_transforms_are_inverse(theta, vector):
     )
 
 
+@given(angles, st.lists(st.floats(-50, 50), min_size=3, max_size=3))
+def test_twists_in_floats_are_the_hand_frame_matrix(theta, vector):
+    """The float transforms agree with the frame ``[e_n e_t]`` of :func:`geometry.hand_normal` and
+    :func:`geometry.hand_tangent` (NumPy), not merely with each other."""
+    frame = geometry.hand_frame(theta)
+    dn, dt, dtheta = vector
+    expected = [*(frame @ [dn, dt]), dtheta]
+    np.testing.assert_allclose(geometry.twist_hand_to_world(theta, vector), expected, rtol=0, atol=1e-12)
+    expected = [*(frame.T @ [dn, dt]), dtheta]
+    np.testing.assert_allclose(geometry.twist_world_to_hand(theta, vector), expected, rtol=0, atol=1e-12)
+    axes = geometry.hand_axes(theta)
+    np.testing.assert_allclose(geometry.world_to_hand(axes, dn, dt), frame.T @ [dn, dt], rtol=0, atol=1e-12)
+
+
 def test_symbolic_frame_matches_numeric():
     theta = ca.SX.sym("theta")
     frame = ca.Function("frame", [theta], [geometry.hand_frame(theta)])

@@ -395,12 +395,12 @@ def _prior_row(
 ) -> Row2:
     """The row of slope ``mu_prior`` about ``up`` on ``side`` (+1 right, −1 left) touching the polygon
     ``vertices``."""
-    normal = face_normal(up, mu_prior, side)
+    normal = friction_face_normal(up, mu_prior, side)
     nx, ny = normal
     return normal, max([nx * x + ny * y for x, y in vertices]), 0.0
 
 
-def face_normal(up: tuple[float, float], mu: float, side: float) -> tuple[float, float]:
+def friction_face_normal(up: tuple[float, float], mu: float, side: float) -> tuple[float, float]:
     """The outward unit normal of a friction face of slope ``mu`` about ``up`` on ``side`` (+1 right,
     −1 left): along ``right + μ up``, ``right = side · (up_y, −up_x)``."""
     scale = math.hypot(1.0, mu)

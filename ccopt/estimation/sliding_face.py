@@ -40,7 +40,7 @@ import math
 import statistics
 from dataclasses import dataclass
 
-from ccopt.estimation.ground_cone import face_normal, interval_passed
+from ccopt.estimation.ground_cone import friction_face_normal, interval_passed
 from ccopt.geometry import WORLD_UP
 from ccopt.validation import check_number
 
@@ -104,7 +104,7 @@ class SlidingFace:
         """The two faces as ground rows ``(unit normal (world), offset (N))``, in ``GROUND_ROWS``
         order (right face ``GROUND_SLIDE_POS`` first)."""
         offset = self.mu_g * self.apex / math.hypot(1.0, self.mu_g)
-        right, left = (face_normal(WORLD_UP, self.mu_g, side) for side in (1.0, -1.0))
+        right, left = (friction_face_normal(WORLD_UP, self.mu_g, side) for side in (1.0, -1.0))
         return (right, offset), (left, offset)
 
 
