@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from ccopt import contact, geometry, modes, validation
+from ccopt import clock, contact, geometry, modes, validation
 from ccopt.contact import GROUND_ROWS, Row
 from ccopt.control.controller import Command, ControlInput, Controller, ControllerParams
 from ccopt.control.targets import UNJUDGED, StaticsTarget, TargetGoal, statics_target
@@ -459,7 +459,8 @@ class _StepTracker:
             self._within_since = None
         elif self._within_since is None:
             self._within_since = now
-        if (within and now - self._within_since >= self.settle_time - 1e-9) or self._overshot(coordinates):
+        settled = within and clock.lasted(now, self._within_since, self.settle_time)
+        if settled or self._overshot(coordinates):
             return self.advance(now, estimate, hand_pose, "reached")
         if self.goal is not None and self._lost(now, coordinates):
             return self.advance(now, estimate, hand_pose, "lost", "the kinematics became unknown")
@@ -514,7 +515,7 @@ class _StepTracker:
         if not condition:
             self._since.pop(name, None)
             return False
-        return now - self._since.setdefault(name, now) >= duration - 1e-9
+        return clock.lasted(now, self._since.setdefault(name, now), duration)
 
     def _other_slid(self, now: float, coordinates: np.ndarray | None) -> bool:
         """Whether, in a slide measured on the estimate, the coordinate of the contact it keeps
@@ -851,7 +852,7 @@ class _Loop:
         """The estimated statics' target of the command: evaluated afresh at a step's start and once
         a statics period (:attr:`LoopParams.statics_hz`) has passed, else the last one."""
         now, last = self.now, self.last_aim
-        if self.tracker.fresh or last is None or now - last[0] >= self.statics_period - 1e-9:
+        if self.tracker.fresh or last is None or clock.lasted(now, last[0], self.statics_period):
             motion, tracker = self.tracker.command.motion, self.tracker
             planned = tracker.goal is not None and not tracker.step.explore
             self.last_aim = (now, statics_target(estimate, float(hand_pose[2]), motion, self.goal, planned))

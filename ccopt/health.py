@@ -47,13 +47,13 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ccopt import clock
+from ccopt.clock import TIME_TOLERANCE
 from ccopt.estimation.quantile import check_count, check_number
 
 OK = "ok"
 FAULT_NAMES = ("dead", "stuck", "implausible", "pose_lost")
 """The faults :class:`SensorHealth` reports, besides :data:`OK`."""
-_TIME_TOLERANCE = 1e-9
-"""Durations are compared with this slack (s)."""
 CRITICAL_DAMPING = 2.0 * math.sqrt(2000.0 * 1.0)
 """N·s/m: critical damping of the default 1 kg hand on 2000 N/m, the plants' default impedance."""
 
@@ -173,7 +173,7 @@ class SensorHealth:
             self._wrench_seen = time
         if pose_ok:
             self._pose_seen = time
-        timeout = self.params.signal_timeout - _TIME_TOLERANCE
+        timeout = self.params.signal_timeout - TIME_TOLERANCE
         if time - self._wrench_seen > timeout:
             return self._fault("dead", time, f"no finite wrench for {time - self._wrench_seen:.3g} s")
         if time - self._pose_seen > timeout:
@@ -231,7 +231,7 @@ class SensorHealth:
             return
         if math.isnan(self._over_since):
             self._over_since = time
-        if time - self._over_since >= params.hold - _TIME_TOLERANCE:
+        if clock.lasted(time, self._over_since, params.hold):
             dead = self._previous == (0.0, 0.0, 0.0)
             self._fault(
                 "dead" if dead else "implausible",

@@ -47,6 +47,7 @@ import numpy as np
 
 from ccopt import plots, record
 from ccopt.cliutil import fail, print_table
+from ccopt.clock import TIME_TOLERANCE
 from ccopt.closed_loop import LoopParams
 from ccopt.experiment import run_experiment
 from ccopt.objects import make_object
@@ -81,8 +82,6 @@ MAX_OVER_LIMIT_S = 0.05
 """Longest time over the limit the acceptance allows, s."""
 MAX_END_S = 2.0
 """A run that does not complete must end within this long of the fault's start, s."""
-_TIME_TOLERANCE = 1e-9
-"""Durations are compared with this slack, s (5 samples of 10 ms are 50 ms)."""
 
 
 @dataclass(frozen=True)
@@ -124,10 +123,10 @@ def fault_trial(spec: FaultTrial) -> dict:
         "peak_force_n": forces.get("peak_force_n"),
         "over_limit_s": over_s,
         "kept_s": kept_s,
-        "kept_all": kept_s is not None and kept_s >= done.result.sim_time - record_period - _TIME_TOLERANCE,
+        "kept_all": kept_s is not None and kept_s >= done.result.sim_time - record_period - TIME_TOLERANCE,
         **kept_checks,
-        "ended_in_time": status == "completed" or ended_after <= MAX_END_S + _TIME_TOLERANCE,
-        "force_ok": over_s is not None and over_s <= MAX_OVER_LIMIT_S + _TIME_TOLERANCE,
+        "ended_in_time": status == "completed" or ended_after <= MAX_END_S + TIME_TOLERANCE,
+        "force_ok": over_s is not None and over_s <= MAX_OVER_LIMIT_S + TIME_TOLERANCE,
     }
 
 

@@ -51,11 +51,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ccopt import validation
+from ccopt.clock import interval_passed
 from ccopt.estimation.quantile import P2QuantileBank, check_count, check_level, check_number
 from ccopt.geometry import WORLD_UP
 
-_TIME_TOLERANCE = 1e-9
-"""Intervals are compared with this slack (s), so that sample times with rounding errors still count."""
 FACE_COSINE_RANGE = (math.sin(math.radians(3.0)), math.cos(math.radians(15.0)))
 """``up·ν`` of a friction face's outward normal ``ν``: it is ``sin(atan μ_g − α)`` on a ground tilted
 by ``α`` towards that side, positive on any ground that holds the object at rest (``α < atan μ_g``):
@@ -180,12 +179,6 @@ class GroundConeEstimator:
             self.cone = fit_ground_cone(self.directions, support, self.params, count)
             self._fitted_to = fitted_to
         return self.cone
-
-
-def interval_passed(time: float, last: float, interval: float) -> bool:
-    """Whether ``interval`` (s) has passed from ``last`` to ``time`` (within rounding of sample
-    times), or time went back (a new recording): when a streaming estimate takes its next sample."""
-    return time - last >= interval - _TIME_TOLERANCE or time < last
 
 
 def fit_ground_cone(

@@ -40,7 +40,8 @@ import math
 import statistics
 from dataclasses import dataclass
 
-from ccopt.estimation.ground_cone import friction_face_normal, interval_passed
+from ccopt.clock import interval_passed
+from ccopt.estimation.ground_cone import friction_face_normal
 from ccopt.geometry import WORLD_UP
 from ccopt.validation import check_number
 

@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ccopt import geometry
+from ccopt.clock import TIME_TOLERANCE
 from ccopt.hand import Hand
 from ccopt.objects import PlanarObject
 from ccopt.plant import scene
@@ -125,7 +126,7 @@ class MujocoPlant:
             if chunk > 0:
                 self._advance(chunk)
                 remaining -= chunk
-            if self.time >= self._push_end - 1e-9:
+            if self.time >= self._push_end - TIME_TOLERANCE:
                 self._data.xfrc_applied[self._object_body] = 0.0
                 self._push_end = None
 

@@ -22,6 +22,7 @@ from numbers import Real
 
 import numpy as np
 
+from ccopt.clock import TIME_TOLERANCE
 from ccopt.plant.base import Plant
 
 FAULT_KINDS = {
@@ -43,8 +44,6 @@ MAX_DELAY = 10.0
 Sample = tuple[np.ndarray, np.ndarray]
 """A measured ``(hand pose, hand wrench)``."""
 _FAULT_SYNTAX = re.compile(r"(?P<kind>[a-z-]+)(?::(?P<value>[^@]*))?(?:@(?P<start>.*))?")
-_TIME_TOLERANCE = 1e-9
-"""Sample times are compared with this slack (s)."""
 
 
 @dataclass(frozen=True)
@@ -247,7 +246,7 @@ class Sensors:
         pose = self.plant.hand_pose() + self._pose_offsets[k]
         wrench = self.plant.hand_wrench() + self._wrench_offsets[k]
         for stage in self._faults:
-            if time >= stage.start - _TIME_TOLERANCE:
+            if time >= stage.start - TIME_TOLERANCE:
                 pose, wrench = stage.apply(time, k, pose, wrench)
             else:
                 stage.observe(time, pose, wrench)
@@ -329,14 +328,14 @@ class _Delay(_FaultStage):
         """Keep the samples still needed: the newest one at least ``value`` old, and all later."""
         history = self._history
         history.append((time, pose, wrench))
-        due = time - self.value + _TIME_TOLERANCE
+        due = time - self.value + TIME_TOLERANCE
         while len(history) > 1 and history[1][0] <= due:
             history.popleft()
 
     def apply(self, time: float, k: int, pose: np.ndarray, wrench: np.ndarray) -> Sample:
         self.observe(time, pose, wrench)
         taken, old_pose, old_wrench = self._history[0]
-        if taken > time - self.value + _TIME_TOLERANCE:
+        if taken > time - self.value + TIME_TOLERANCE:
             return np.full(3, np.nan), np.full(3, np.nan)
         return old_pose.copy(), old_wrench.copy()
 
