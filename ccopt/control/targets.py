@@ -41,6 +41,7 @@ three trials (27 → 24 of 50 at the bar: slips and unfinished steps) that the n
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 
@@ -173,6 +174,12 @@ class TargetGoal:
     push: float = 0.0
     headroom: float = 0.0
 
+    @functools.cached_property
+    def best_margin(self) -> TargetGoal:
+        """This goal with no margin goal short of the best (a measured hand slide's, see the module),
+        made once."""
+        return dataclasses.replace(self, margin=math.inf)
+
 
 def statics_target(
     estimate: Estimate, hand_angle: float, motion: Motion, goal: TargetGoal, planned: bool = False
@@ -183,7 +190,7 @@ def statics_target(
     largest margin once the hand friction is measured (see the module)."""
     kind = modes.kind_of(motion)
     if planned and kind == "slide_hand" and estimate.hand_slid:
-        goal = dataclasses.replace(goal, margin=math.inf)  # no margin goal short of the best
+        goal = goal.best_margin
     push = goal.push if kind == "slide_ground" else 0.0
     known = estimated_statics(estimate, hand_angle, motion=motion, push=push)
     target = _target(known, estimate, hand_angle, motion, goal)
