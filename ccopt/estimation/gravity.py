@@ -166,7 +166,8 @@ class GravityEstimator:
         contact: _GroundContact,
         force_world: tuple[float, float] | None = None,
     ) -> GravityEstimate:
-        """One sample (see :meth:`add`), used if the kinematics regressed it on a fixed ground
+        """One sample: face angle ``θ_o`` (rad), measured ``(x_h, y_h, θ_h)`` (world, m/rad) and
+        ``(f_n, f_t, τ)`` (hand frame, N/N·m). It is used if the kinematics regressed it on a fixed ground
         contact and, where that contact is known, its moment about it agrees with the estimate so
         far (:meth:`_consistent`); ``contact`` is their ground contact estimate, ``force_world`` the
         hand force in world axes where the caller has it (N; else it is made from the wrench). A
@@ -201,11 +202,6 @@ class GravityEstimator:
             laa, lab, lbb = pbb / det, -pab / det, paa / det
             self._prior = (laa, lab, lbb, laa * a + lab * b, lab * a + lbb * b)
         self._clear_segment()
-
-    def add(self, theta_o: float, hand_pose: list[float], hand_wrench: list[float]) -> None:
-        """One sample: face angle ``θ_o`` (rad), measured ``(x_h, y_h, θ_h)`` (world, m/rad) and
-        ``(f_n, f_t, τ)`` (hand frame, N/N·m), the object in equilibrium on a fixed ground contact."""
-        self._accumulate(*_moment_sample(theta_o, hand_pose, hand_wrench))
 
     def _consistent(self, sample: _MomentSample, hand_pose: list[float], contact: _GroundContact) -> bool:
         """Whether a sample's moment about ``contact``, ``m + x_o f_y − y_o f_x``, lies within ``gate``
