@@ -33,8 +33,9 @@ that way for the rest of the run (:attr:`GoalSequencer.tilt_limits`): what the e
 the object's tipping points. A goal not yet reached beyond a limit first pivots back to it
 (:func:`~ccopt.planning.planner.back_within`).
 
-``s_g`` goals are measured from ``s_g_origin``, the estimated ground contact when the kinematics
-first became usable (the run's start, unless the ground slid before).
+``s_g`` goals are measured from ``s_g_origin``: the run's start ground contact as the estimate knows
+it, the latest usable estimate while the ground has neither been commanded to slide nor seen moving
+(``ccopt.closed_loop``'s step tracker). A slip the estimate never saw stays in it.
 """
 
 from __future__ import annotations
