@@ -48,7 +48,6 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ccopt import clock
-from ccopt.clock import TIME_TOLERANCE
 from ccopt.estimation.quantile import check_count, check_number
 
 OK = "ok"
@@ -173,7 +172,7 @@ class SensorHealth:
             self._wrench_seen = time
         if pose_ok:
             self._pose_seen = time
-        timeout = self.params.signal_timeout - TIME_TOLERANCE
+        timeout = self.params.signal_timeout - clock.TIME_TOLERANCE
         if time - self._wrench_seen > timeout:
             return self._fault("dead", time, f"no finite wrench for {time - self._wrench_seen:.3g} s")
         if time - self._pose_seen > timeout:
