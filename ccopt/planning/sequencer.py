@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,6 +53,7 @@ from ccopt.modes import Motion, kind_of
 from ccopt.planning.graph import Statics
 from ccopt.planning.planner import Plan, PlannerParams, StaticsOf, back_within, next_motion, past_reach
 from ccopt.schedule import Goal, Step, exploration
+from ccopt.statics import ObjectStatics
 
 GOAL_STATUSES = ("reached", "unreachable", "timeout", "failed")
 """How a goal can end (see the module docstring)."""
@@ -194,9 +196,11 @@ class GoalSequencer:
         f_min, f_max = self.aim.force_limits
         forces = (f_min, f_max - self.aim.headroom)
 
+        estimated = _estimated_statics(estimate, self.aim.push)
+
         def plan_with(mu_h: float | None, hand_ceiling: float | None = None) -> Plan:
             return next_motion(
-                _statics_of(estimate, mu_h, self.aim.push, hand_ceiling),
+                _statics_of(estimated, mu_h, hand_ceiling),
                 where,
                 self.goal,
                 s_g_origin,
@@ -274,25 +278,41 @@ def _usable(estimate: Estimate) -> bool:
     return bool(estimate.kinematics_valid) and all(map(math.isfinite, values))
 
 
-def _statics_of(
-    estimate: Estimate, mu_h: float | None, push: float, hand_ceiling: float | None = None
-) -> StaticsOf:
-    """The estimated statics per motion (at the current hand angle's gravity moment where no model
-    is estimated yet), with the hand friction ``mu_h`` if given and a ground slide sought ``push`` (N)
-    past the sticking forces seen where its friction face is not known
-    (:func:`ccopt.control.targets.estimated_statics`); a hand slide, where ``hand_ceiling`` is given,
-    under that hand friction as well (the hand friction is known only to lie between them)."""
-    cache: dict[Motion, Statics] = {}
+EstimatedStatics = Callable[[float | None, Motion], ObjectStatics]
+"""The statics an estimate knows for a motion, with a given hand friction (None: ``μ̂_h``)."""
+
+
+def _estimated_statics(estimate: Estimate, push: float) -> EstimatedStatics:
+    """The estimated statics of a motion with the hand friction ``mu_h`` (None: ``μ̂_h``), at the
+    current hand angle's gravity moment where no model is estimated yet, a ground slide sought
+    ``push`` (N) past the sticking forces seen where its friction face is not known
+    (:func:`ccopt.control.targets.estimated_statics`); each made once for all of a plan's searches."""
+    cache: dict[tuple[float | None, Motion], ObjectStatics] = {}
     angle = float(estimate.theta_o)
 
-    def statics_of(motion: Motion) -> Statics:
-        if motion not in cache:
+    def of(mu_h: float | None, motion: Motion) -> ObjectStatics:
+        key = (mu_h, motion)
+        if key not in cache:
             known = estimated_statics(estimate, angle, mu_h, motion, push)
             if known is None:
                 raise ValueError("the estimate cannot judge the statics")
-            sliding = hand_ceiling is not None and kind_of(motion) == "slide_hand"
-            cache[motion] = (known, dataclasses.replace(known, mu_h=hand_ceiling)) if sliding else known
-        return cache[motion]
+            cache[key] = known
+        return cache[key]
+
+    return of
+
+
+def _statics_of(
+    estimated: EstimatedStatics, mu_h: float | None, hand_ceiling: float | None = None
+) -> StaticsOf:
+    """The statics per motion with the hand friction ``mu_h`` (None: ``μ̂_h``); a hand slide, where
+    ``hand_ceiling`` is given, under that hand friction as well (the hand friction is known only to
+    lie between them)."""
+
+    def statics_of(motion: Motion) -> Statics:
+        if hand_ceiling is not None and kind_of(motion) == "slide_hand":
+            return estimated(mu_h, motion), estimated(hand_ceiling, motion)
+        return estimated(mu_h, motion)
 
     return statics_of
 
