@@ -354,13 +354,13 @@ def test_an_exploration_pivot_past_a_tilt_limit_turns_the_other_way() -> None:
 
 
 def plan_nominally(
-    statics_of, c: Case, goal: Goal, params: PlannerParams, max_motions: int = 40
+    statics_of, c: Case, goal: Goal, params: PlannerParams, max_motions: int = 40, barred=None
 ) -> tuple[str, list[Step]]:
     """``next_motion`` from the start with every motion applied nominally: its last status and motions."""
     where, motions = np.array(start_of(c)), []
     for _ in range(max_motions):
         plan = next_motion(statics_of, tuple(where), goal, 0.0, c.reach, c.lever, FORCES, params,
-                           face=c.truth.s_h_range)
+                           face=c.truth.s_h_range, barred=barred)
         if plan.status != "move":
             return plan.status, motions
         motions.append(plan.motion)
@@ -403,3 +403,82 @@ def test_a_hand_slide_judged_on_a_friction_interval_keeps_the_margin_at_both_end
             where[step.coordinate] += step.delta
     if name in ("heavy-triangle", "random-triangle"):
         assert any(stricter)
+
+
+def hand_slide_tilts(c: Case, motions: list[Step]) -> list[float]:
+    """The tilts (rad) at which ``motions``, applied nominally from the start, slide the hand."""
+    where, tilts = np.array(start_of(c)), []
+    for step in motions:
+        if step.kind == "slide_hand":
+            tilts.append(float(where[0]))
+        where[step.coordinate] += step.delta
+    return tilts
+
+
+@pytest.mark.parametrize("name", ["heavy-triangle", "random-triangle"])
+@pytest.mark.parametrize("sign", [1, -1])
+def test_a_barred_hand_slide_is_planned_elsewhere_with_the_margin_or_not_at_all(
+    cases: dict[str, Case], name: str, sign: int
+) -> None:
+    """A hand slide barred within half a pivot step of the tilt the plan first slides at (as the
+    sequencer bars one that failed there) is planned at least half a step away, every motion keeping
+    the margin (direct LPs), or the goal is unreachable; barred everywhere, unreachable."""
+    c = cases[name]
+    params = PlannerParams()
+    goal = Goal(s_h=c.truth.s_h + sign * params.hand_slide)
+    motion = Motion.SLIDE_HAND_POS if sign > 0 else Motion.SLIDE_HAND_NEG
+    known = lambda motion: c.truth.statics  # noqa: E731
+    status, motions = plan_nominally(known, c, goal, params)
+    assert status == "reached"  # both objects slide the hand either way (the paper triangle does not)
+    first = hand_slide_tilts(c, motions)[0]
+    half = 0.5 * params.pivot_step
+
+    def near_first(theta: float, barred: Motion) -> bool:
+        return barred == motion and abs(theta - first) < half
+
+    status, motions = plan_nominally(known, c, goal, params, barred=near_first)
+    assert status in ("reached", "unreachable")
+    if status == "reached":
+        assert all(abs(tilt - first) >= half - 1e-9 for tilt in hand_slide_tilts(c, motions))
+        assert_plan_keeps_margin(c, tuple(motions), params)
+    status, motions = plan_nominally(known, c, goal, params, barred=lambda theta, barred: barred == motion)
+    assert status == "unreachable" and not any(step.kind == "slide_hand" for step in motions)
+
+
+def test_failed_hand_slides_are_tried_twice_per_tilt_three_times_in_all_then_unreachable() -> None:
+    """The sequencer on a fixed object whose hand slides either way are possible by the estimate
+    (μ̂_h 0.3, tests.test_targets' object): every hand slide it plans is held ('rolled' or
+    'timeout'), every pivot is done. No hand slide is planned a third time within half a pivot step
+    of two that failed, three are tried in all, and the goal ends unreachable naming their tilts.
+    A slide that slipped the ground bars nothing: the next plan is the same slide."""
+    from tests.test_targets import OBJECT, S_H, THETA_O, known_estimate
+
+    aim = TargetGoal(force_limits=(3.0, 25.0), nominal_force=8.0, margin=3.0, friction_step=0.1)
+    half = 0.5 * PlannerParams().pivot_step
+    for sign in (1, -1):
+        sequencer = GoalSequencer(0, reach(s_h_mm=sign * 10.0), 0.0, HAND_ANGLE_RANGE, aim)
+        theta, failed, outcomes = THETA_O, [], iter(("rolled", "timeout", "rolled"))
+        answer = sequencer.next(0.0, known_estimate(OBJECT, theta, S_H, mu_h=0.3), 0.1)
+        for _ in range(30):
+            if not isinstance(answer, Step):
+                break
+            status = "reached"
+            if answer.kind == "slide_hand":
+                assert answer.delta * sign > 0
+                assert sum(abs(theta - tilt) < half for tilt in failed) < 2
+                failed.append(theta)
+                status = next(outcomes)
+            elif answer.kind == "pivot":
+                theta += answer.delta
+            answer = sequencer.next(1.0, known_estimate(OBJECT, theta, S_H, mu_h=0.3), 0.1, status)
+        assert len(failed) == GoalSequencer.max_hand_slide_failures == 3
+        assert answer.status == "unreachable"
+        way = "+" if sign > 0 else "−"
+        tilts = ", ".join(f"{math.degrees(tilt):.0f}°" for tilt in failed)
+        assert answer.reason.endswith(f"(hand slides tried and failed towards {way}s_h at {tilts})")
+    sequencer = GoalSequencer(0, reach(s_h_mm=10.0), 0.0, HAND_ANGLE_RANGE, aim)
+    at = known_estimate(OBJECT, THETA_O, S_H, mu_h=0.3)
+    first = sequencer.next(0.0, at, 0.1)
+    assert first.kind == "slide_hand"
+    assert sequencer.next(1.0, at, 0.1, "slipped") == first
+    assert sequencer.next(2.0, at, 0.1, "slipped") == first

@@ -117,6 +117,8 @@ class ConfigurationGraph:
         lever: the torque rows' lever ``l_h`` (m) and ``force_limits`` ``(f_min, f_max)`` (N).
         params: grid and margin.
         reachable: optional ``(θ_o, s_h) → bool`` of further limits (e.g. the arm's reach).
+        barred: optional ``(θ_o, motion) → bool``: motions seen failing at a tilt whatever the
+            statics say (a hand slide the hand held against there), given no margin.
     """
 
     def __init__(
@@ -127,6 +129,7 @@ class ConfigurationGraph:
         force_limits: tuple[float, float],
         params: GraphParams | None = None,
         reachable: Callable[[float, float], bool] | None = None,
+        barred: Callable[[float, Motion], bool] | None = None,
     ) -> None:
         self.known = known
         self.start = start
@@ -134,6 +137,7 @@ class ConfigurationGraph:
         self.force_limits = force_limits
         self.params = params or GraphParams()
         self._reachable = reachable
+        self._barred = barred
         self._stride = round(self.params.hand_slide / self.params.s_h_step)
         self._margins: dict[tuple[Node, Motion], float] = {}
 
@@ -163,10 +167,15 @@ class ConfigurationGraph:
         """The statics margin of ``motion`` at a node, N (cached: a graph lives as long as its statics)."""
         key = (node, motion)
         if key not in self._margins:
-            theta, s_h = self.configuration(node)
-            known = self.known(motion) if callable(self.known) else self.known
-            self._margins[key] = least_margin(known, theta, s_h, motion, self.lever, self.force_limits)
+            self._margins[key] = self.margin_at(*self.configuration(node), motion)
         return self._margins[key]
+
+    def margin_at(self, theta_o: float, s_h: float, motion: Motion) -> float:
+        """The statics margin of ``motion`` at any ``(θ_o, s_h)`` (rad, m), N; −inf where barred."""
+        if self._barred is not None and self._barred(theta_o, motion):
+            return -math.inf
+        known = self.known(motion) if callable(self.known) else self.known
+        return least_margin(known, theta_o, s_h, motion, self.lever, self.force_limits)
 
     def edges(self, node: Node) -> Iterator[Edge]:
         """Every motion the statics allow from ``node`` (pivots, hand slides, ground slides)."""

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ccopt.modes import Motion, motion_of
-from ccopt.planning.graph import ConfigurationGraph, Edge, GraphParams, Node, Statics, least_margin
+from ccopt.planning.graph import ConfigurationGraph, Edge, GraphParams, Node, Statics
 from ccopt.planning.tour import reachable_nodes
 from ccopt.schedule import DEFAULT_TIMEOUT, DEFAULT_TOLERANCE, PIVOT_STEP, SLIDE_STEP, Goal, Step
 from ccopt.statics import ObjectStatics
@@ -128,6 +128,7 @@ def next_motion(
     params: PlannerParams | None = None,
     face: tuple[float, float] | None = None,
     failed_slides: dict[int, float] | None = None,
+    barred: Callable[[float, Motion], bool] | None = None,
 ) -> Plan:
     """The next motion towards ``goal`` from ``where = (θ_o, s_h, s_g)`` (see the module docstring).
 
@@ -139,19 +140,18 @@ def next_motion(
     the tilts ``θ_o`` (rad) at which a ground slide each way (``+1``, ``-1``) was tried and did not
     start: a slide towards ``±s_g`` is then sought only at tilts at least half a pivot step beyond,
     further that way (tilting the hand's normal towards the slide is what lets the hand push the
-    object along).
+    object along); ``barred(θ_o, motion)`` the motions seen failing at a tilt whatever the statics
+    say (:class:`~ccopt.planning.graph.ConfigurationGraph`).
     """
     params = params or PlannerParams()
     errors = goal.errors(np.asarray(where, dtype=float), s_g_origin)
     tolerances = params.aim * goal.tolerances
     if np.all(np.abs(errors) <= tolerances):
         return REACHED
-    graph = _graph(statics_of, where, goal, reach, lever, force_limits, params, face)
+    graph = _graph(statics_of, where, goal, reach, lever, force_limits, params, face, barred)
     if abs(errors[2]) > tolerances[2]:
         return _towards_ground(graph, errors[2], goal, statics_of, lever, params, failed_slides or {})
-    return _towards_configuration(
-        graph, where, errors, tolerances, goal, statics_of, lever, force_limits, params
-    )
+    return _towards_configuration(graph, where, errors, tolerances, goal, statics_of, lever, params)
 
 
 def _graph(
@@ -163,6 +163,7 @@ def _graph(
     force_limits: tuple[float, float],
     params: PlannerParams,
     face: tuple[float, float] | None,
+    barred: Callable[[float, Motion], bool] | None = None,
 ) -> ConfigurationGraph:
     theta, s_h, _ = where
     target = s_h if goal.s_h is None else goal.s_h
@@ -179,7 +180,7 @@ def _graph(
         s_h_range=band,
         min_margin=params.margin,
     )
-    return ConfigurationGraph(statics_of, (theta, s_h), lever, force_limits, grid)
+    return ConfigurationGraph(statics_of, (theta, s_h), lever, force_limits, grid, barred=barred)
 
 
 def back_within(theta: float, reach: tuple[float, float], params: PlannerParams) -> Plan | None:
@@ -244,7 +245,6 @@ def _towards_configuration(
     goal: Goal,
     statics_of: StaticsOf,
     lever: float,
-    force_limits: tuple[float, float],
     params: PlannerParams,
 ) -> Plan:
     """Go to a node within half a step of the goal's ``(θ_o, s_h)`` from where the rest closes with
@@ -273,7 +273,7 @@ def _towards_configuration(
         left = left_at(node)
         if np.any(np.abs(left) > half + 1e-12):
             return False
-        return _closing_margin((theta, s_h), rest(node), statics_of, lever, force_limits) >= params.margin
+        return _closing_margin(graph, (theta, s_h), rest(node)) >= params.margin
 
     path = graph.shortest_path(Node(0, 0), near, _motion_cost)
     if path is None:
@@ -288,20 +288,15 @@ def _towards_configuration(
 
 
 def _closing_margin(
-    start: tuple[float, float],
-    motions: list[tuple[str, float]],
-    statics_of: StaticsOf,
-    lever: float,
-    force_limits: tuple[float, float],
+    graph: ConfigurationGraph, start: tuple[float, float], motions: list[tuple[str, float]]
 ) -> float:
     """The smallest margin of partial motions taken in turn from ``start`` (at both ends of each)."""
     least, (theta, s_h) = math.inf, start
     for kind, delta in motions:
         motion = motion_of(kind, delta)
-        known = statics_of(motion)
         end = (theta + delta, s_h) if kind == "pivot" else (theta, s_h + delta)
         for point in ((theta, s_h), end):
-            least = min(least, least_margin(known, *point, motion, lever, force_limits))
+            least = min(least, graph.margin_at(*point, motion))
         theta, s_h = end
     return least
 

@@ -32,6 +32,13 @@ another vertex or a face) marks the tilt where the roll was first seen, a degree
 that way for the rest of the run (:attr:`GoalSequencer.tilt_limits`): what the estimate knows of
 the object's tipping points. A goal not yet reached beyond a limit first pivots back to it
 (:func:`~ccopt.planning.planner.back_within`).
+A hand slide that the hand held against (it ended ``rolled`` on the
+face's end or did not start: the object stayed where it was) is tried once more where it failed, then
+not within half a pivot step of that tilt, and after :attr:`GoalSequencer.max_hand_slide_failures`
+such failures that way not at all, for the rest of the goal (:attr:`GoalSequencer.failed_hand_slides`).
+A goal the estimate then leaves no way to is ``unreachable``, its reason naming the failed slides.
+A hand slide that slid the ground instead is not one of them: the object moved, and sought at other
+tilts the next slides slid it further (on the goals study they tipped a quadrilateral over).
 
 ``s_g`` goals are measured from ``s_g_origin``: the run's start ground contact as the estimate knows
 it, the latest usable estimate while the ground has neither been commanded to slide nor seen moving
@@ -57,6 +64,8 @@ from ccopt.statics import ObjectStatics
 
 GOAL_STATUSES = ("reached", "unreachable", "timeout", "failed")
 """How a goal can end (see the module docstring)."""
+HELD = ("rolled", "timeout")
+"""How a hand slide ends when the hand held against it and the object stayed put."""
 
 
 @dataclass(frozen=True)
@@ -115,6 +124,8 @@ class GoalSequencer:
 
     max_misses = 3
     max_explorations = 2
+    max_hand_slide_failures = 3
+    hand_slide_tries_per_tilt = 2
 
     def __init__(
         self,
@@ -140,6 +151,9 @@ class GoalSequencer:
         goals share it (it is the object's, not the goal's)."""
         self.failed_slides: dict[int, float] = {}
         """Per way (``±1``), the tilt (rad) of the last ground slide that did not start."""
+        self.failed_hand_slides: dict[Motion, list[float]] = {}
+        """Per hand-slide motion, the tilts (rad) where the hand held against it (it ended
+        ``rolled`` or ``timeout``): see :meth:`_barred`."""
         self._exploration: list[Step] | None = None
         self.explorations = 0
         self._last: tuple[Step, float] | None = None  # the last motion and the tilt it began at
@@ -160,6 +174,8 @@ class GoalSequencer:
             step, tilt = self._last
             if step.kind == "slide_ground":
                 self.failed_slides[1 if step.delta > 0 else -1] = tilt
+            if step.kind == "slide_hand" and last_status in HELD:
+                self.failed_hand_slides.setdefault(step.motion, []).append(tilt)
             if step.kind == "pivot" and last_status == "rolled":
                 way = 1 if step.delta > 0 else -1
                 self.tilt_limits[way] = tilt_limit(tilt, roll_tilt, way)
@@ -186,7 +202,7 @@ class GoalSequencer:
         if back is not None:
             plan = back
         if plan.status == "unreachable":
-            return self.end(now, "unreachable", plan.reason)
+            return self.end(now, "unreachable", plan.reason + self._failures())
         self._last = (plan.motion, float(estimate.theta_o))
         probe = plan.explores or seeks_friction(estimate, plan.motion.motion)
         return self._take(dataclasses.replace(plan.motion, explore=True) if probe else plan.motion)
@@ -209,6 +225,7 @@ class GoalSequencer:
                 forces,
                 self.params,
                 failed_slides=self.failed_slides,
+                barred=self._barred,
             )
 
         if estimate.hand_slid:
@@ -228,6 +245,36 @@ class GoalSequencer:
         if bolder.status != "move":
             return plan
         return Plan(bolder.status, bolder.motion, bolder.reason, bolder.path, explores=True)
+
+    def _barred(self, theta: float, motion: Motion) -> bool:
+        """Whether ``motion`` failed :attr:`hand_slide_tries_per_tilt` times within half a pivot
+        step of the tilt ``theta`` (rad), or :attr:`max_hand_slide_failures` times in all.
+
+        A hand slide that failed is evidence the estimated statics lack: until the hand slides,
+        ``μ̂_h`` is a lower bound, and a slide sought at it sets the normal force for too little
+        friction (the centre of pressure moves by ``d̂ Δμ_h`` as the tangential force grows: 10 mm
+        on the heavy paper triangle between ``μ̂_h`` 0.41 and the true 0.5) and loads the ground
+        with too little tangential force. Tried at the same tilt again and again with the estimate
+        barely changed, the paper triangle's hand slides rolled or did not start three times in a
+        row and its goals failed; tried at ever larger tilts, the light triangle's slid the ground
+        at the third and fourth (38° and 46°). But one retry where it failed is worth it: a
+        ``rolled`` slide is judged on the conservative report (a torque near the hand's limit reads
+        as maybe rolling, with the true hand flush), and on the goals study the second try at the
+        same tilt slid the hand where the first had rolled."""
+        tilts = self.failed_hand_slides.get(motion, ())
+        if len(tilts) >= self.max_hand_slide_failures:
+            return True
+        near = sum(abs(theta - tilt) < 0.5 * self.params.pivot_step for tilt in tilts)
+        return near >= self.hand_slide_tries_per_tilt
+
+    def _failures(self) -> str:
+        """The failed hand slides, for an ``unreachable`` reason ("" if none)."""
+        tried = [
+            f"towards {'+' if motion == Motion.SLIDE_HAND_POS else '−'}s_h at "
+            + ", ".join(f"{math.degrees(tilt):.0f}°" for tilt in tilts)
+            for motion, tilts in self.failed_hand_slides.items()
+        ]
+        return f" (hand slides tried and failed {'; '.join(tried)})" if tried else ""
 
     def _reach(self) -> tuple[float, float]:
         """The robot's reach, cut at the tilts where a pivot rolled the hand."""
