@@ -29,7 +29,7 @@ from matplotlib.patches import Patch, Polygon
 from matplotlib.ticker import MaxNLocator
 from PIL import Image, ImageDraw, ImageFont
 
-from ccopt import forked, geometry, metrics, replay
+from ccopt import clock, forked, geometry, metrics, replay
 from ccopt.record import Record
 from ccopt.replay import as_record, has
 
@@ -608,7 +608,7 @@ def animation(run: Run, path: str | Path, max_frames: int = 120) -> Path:
     time = record.data["time"]
     speed, count = playback(float(time[-1] - time[0]), max_frames)
     moments = time[0] + speed * FRAME_S * np.arange(count)
-    frames = np.clip(np.searchsorted(time, moments + 1e-9, side="right") - 1, 0, n - 1)
+    frames = clock.latest_samples(time, moments)
     scene = replay.scene(record, frames)
     xlim, ylim = _view(scene, replay.half_length(record), box[2] * GIF_SIZE[0] / (box[3] * GIF_SIZE[1]))
     ax.set(xlim=xlim, ylim=ylim, xlabel="x (mm)", ylabel="y (mm)")
@@ -623,10 +623,10 @@ def animation(run: Run, path: str | Path, max_frames: int = 120) -> Path:
     background = canvas.copy_from_bbox(fig.bbox)
     still = _rgb(canvas)
     corner = ax.transAxes.transform((0.02, 0.97))
-    clock = (round(corner[0]), round(fig.bbox.height - corner[1]))  # PIL counts rows from the top
+    stamp = (round(corner[0]), round(fig.bbox.height - corner[1]))  # PIL counts rows from the top
     font = ImageFont.truetype(font_manager.findfont("DejaVu Sans"), 14)
     texts = [f"t = {moment - time[0]:.1f} s   (playback {speed:g}× simulated time)" for moment in moments]
-    region = _region(ax, [_text_box(clock, text, font) for text in texts])
+    region = _region(ax, [_text_box(stamp, text, font) for text in texts])
     parts = []
     for text, frame in zip(texts, scene, strict=True):
         canvas.restore_region(background)
@@ -634,7 +634,7 @@ def animation(run: Run, path: str | Path, max_frames: int = 120) -> Path:
             _show(artists[key], xy)
             ax.draw_artist(artists[key])
         part = _rgb(canvas, region)
-        ImageDraw.Draw(part).text((clock[0] - region[0], clock[1] - region[1]), text, fill="black", font=font)
+        ImageDraw.Draw(part).text((stamp[0] - region[0], stamp[1] - region[1]), text, fill="black", font=font)
         parts.append(part)
     _save_gif(path, still, region, parts, FRAME_S)
     return path

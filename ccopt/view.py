@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ccopt import replay
+from ccopt import clock, replay
 from ccopt.record import Record
 
 TIMELINE = "sim_time"
@@ -166,8 +166,8 @@ def _log_scene(rr, stream, record: Record) -> None:
     data = record.data
     time = np.asarray(data["time"], dtype=float)
     period = 1.0 / SCENE_HZ
-    moments = np.arange(time[0], time[-1] + 1e-9, period)
-    frames = np.unique(np.clip(np.searchsorted(time, moments + 1e-9, side="right") - 1, 0, len(time) - 1))
+    moments = np.arange(time[0], time[-1] + clock.TIME_TOLERANCE, period)
+    frames = np.unique(clock.latest_samples(time, moments))
     scene = replay.scene(record, frames)
     extent = np.vstack([frame.hand for frame in scene] + [frame.r_o[None] for frame in scene])
     low, high = extent[:, 0].min() - 0.2, extent[:, 0].max() + 0.2

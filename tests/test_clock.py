@@ -4,7 +4,7 @@ meant to be, and not a rounding error less."""
 import numpy as np
 import pytest
 
-from ccopt.clock import TIME_TOLERANCE, interval_passed, lasted
+from ccopt.clock import TIME_TOLERANCE, interval_passed, lasted, latest_samples
 
 
 @pytest.mark.parametrize("timestep", [0.001, 0.002, 1.0 / 3.0e3])
@@ -25,3 +25,15 @@ def test_interval_passed_also_when_time_went_back() -> None:
     assert interval_passed(5.004, 5.0, 0.004)
     assert not interval_passed(5.003, 5.0, 0.004)
     assert not interval_passed(5.0 + 0.004 - 10 * TIME_TOLERANCE, 5.0, 0.004)
+
+
+def test_latest_samples_are_the_last_at_or_before_each_moment_within_rounding() -> None:
+    """Against a scan: moments on the record's own (rounded) sample times pick that sample, moments
+    between two samples the earlier, moments before the first the first. The record's times are
+    sums of timesteps, and the moments products of a period: they differ by rounding (checked)."""
+    times = np.cumsum(np.full(3000, 0.001)) - 0.001
+    moments = 0.01 * np.arange(300)
+    assert np.any(moments < times[::10][:300]), "no sample rounded past its moment: proves nothing"
+    expected = [max(k for k, t in enumerate(times) if t <= m + 1e-6 * 0.001) for m in moments]
+    assert latest_samples(times, moments).tolist() == expected
+    assert latest_samples(times, np.array([-1.0, 0.0005, 99.0])).tolist() == [0, 0, len(times) - 1]

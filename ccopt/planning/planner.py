@@ -225,10 +225,9 @@ def _towards_ground(
 
     path = graph.shortest_path(Node(0, 0), lambda node: slides(node) is not None, _motion_cost)
     if path is None:
-        way = "+" if sign > 0 else "−"
         return Plan(
             "unreachable",
-            reason=f"s_g {_length(goal.s_g)}: no ground slide towards {way}s_g is possible at any tilt "
+            reason=f"s_g {_length(goal.s_g)}: no ground slide {towards(sign, 's_g')} is possible at any tilt "
             f"in {_degrees(graph.params.theta_range)}{_limits(statics_of, lever)}",
         )
     if path:
@@ -330,9 +329,8 @@ def _blocked(
         nodes = reachable_nodes(graph, Node(0, 0))
         ways = [e for n in nodes for e in graph.edges(n) if e.kind == "slide_hand" and e.delta * sign > 0]
         if not ways:
-            way = "+" if sign > 0 else "−"
             return (
-                f"s_h {_length(goal.s_h)}: no hand slide towards {way}s_h is possible at any tilt in "
+                f"s_h {_length(goal.s_h)}: no hand slide {towards(sign, 's_h')} is possible at any tilt in "
                 f"{_degrees(grid.theta_range)}{_limits(statics_of, lever)}"
             )
     if goal.theta_o is not None:
@@ -344,6 +342,11 @@ def _blocked(
     return (
         f"s_h {_length(goal.s_h)}: no sequence of motions keeps {grid.min_margin:.1f} N of margin on the way"
     )
+
+
+def towards(sign: float, coordinate: str) -> str:
+    """How a reason names a way along a coordinate: ``towards +s_h``, ``towards −s_g``."""
+    return f"towards {'+' if sign > 0 else '−'}{coordinate}"
 
 
 def _limits(statics_of: StaticsOf, lever: float) -> str:

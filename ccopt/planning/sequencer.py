@@ -56,9 +56,17 @@ import numpy as np
 
 from ccopt.control.targets import TargetGoal, estimated_statics, seeks_friction
 from ccopt.estimation.estimator import Estimate
-from ccopt.modes import Motion, kind_of
+from ccopt.modes import Motion, configuration, kind_of
 from ccopt.planning.graph import Statics
-from ccopt.planning.planner import Plan, PlannerParams, StaticsOf, back_within, next_motion, past_reach
+from ccopt.planning.planner import (
+    Plan,
+    PlannerParams,
+    StaticsOf,
+    back_within,
+    next_motion,
+    past_reach,
+    towards,
+)
 from ccopt.schedule import Goal, Step, exploration
 from ccopt.statics import ObjectStatics
 
@@ -151,8 +159,8 @@ class GoalSequencer:
         goals share it (it is the object's, not the goal's)."""
         self.failed_slides: dict[int, float] = {}
         """Per way (``±1``), the tilt (rad) of the last ground slide that did not start."""
-        self.failed_hand_slides: dict[Motion, list[float]] = {}
-        """Per hand-slide motion, the tilts (rad) where the hand held against it (it ended
+        self.failed_hand_slides: dict[int, list[float]] = {}
+        """Per way (``±1``), the tilts (rad) of the hand slides the hand held against (ended
         ``rolled`` or ``timeout``): see :meth:`_barred`."""
         self._exploration: list[Step] | None = None
         self.explorations = 0
@@ -175,7 +183,7 @@ class GoalSequencer:
             if step.kind == "slide_ground":
                 self.failed_slides[1 if step.delta > 0 else -1] = tilt
             if step.kind == "slide_hand" and last_status in HELD:
-                self.failed_hand_slides.setdefault(step.motion, []).append(tilt)
+                self.failed_hand_slides.setdefault(1 if step.delta > 0 else -1, []).append(tilt)
             if step.kind == "pivot" and last_status == "rolled":
                 way = 1 if step.delta > 0 else -1
                 self.tilt_limits[way] = tilt_limit(tilt, roll_tilt, way)
@@ -261,7 +269,9 @@ class GoalSequencer:
         ``rolled`` slide is judged on the conservative report (a torque near the hand's limit reads
         as maybe rolling, with the true hand flush), and on the goals study the second try at the
         same tilt slid the hand where the first had rolled."""
-        tilts = self.failed_hand_slides.get(motion, ())
+        if kind_of(motion) != "slide_hand":
+            return False
+        tilts = self.failed_hand_slides.get(int(configuration(motion).hand_mode), ())
         if len(tilts) >= self.max_hand_slide_failures:
             return True
         near = sum(abs(theta - tilt) < 0.5 * self.params.pivot_step for tilt in tilts)
@@ -270,9 +280,8 @@ class GoalSequencer:
     def _failures(self) -> str:
         """The failed hand slides, for an ``unreachable`` reason ("" if none)."""
         tried = [
-            f"towards {'+' if motion == Motion.SLIDE_HAND_POS else '−'}s_h at "
-            + ", ".join(f"{math.degrees(tilt):.0f}°" for tilt in tilts)
-            for motion, tilts in self.failed_hand_slides.items()
+            f"{towards(way, 's_h')} at " + ", ".join(f"{math.degrees(tilt):.0f}°" for tilt in tilts)
+            for way, tilts in self.failed_hand_slides.items()
         ]
         return f" (hand slides tried and failed {'; '.join(tried)})" if tried else ""
 
