@@ -482,3 +482,33 @@ def test_failed_hand_slides_are_tried_twice_per_tilt_three_times_in_all_then_unr
     assert first.kind == "slide_hand"
     assert sequencer.next(1.0, at, 0.1, "slipped") == first
     assert sequencer.next(2.0, at, 0.1, "slipped") == first
+
+
+def test_a_ground_slide_possible_only_past_the_grid_is_planned_at_the_reach_end(
+    cases: dict[str, Case],
+) -> None:
+    """A reach cut between two grid tilts (a tipping point a pivot found, a degree short): where the
+    ground slide towards −s_g keeps its margin only beyond the grid's outermost tilt, the planner
+    pivots the rest of the way to the reach's end and slides there. Direct LPs: no grid tilt within
+    the reach has the slide's margin, the end has, and every planned motion keeps its margin."""
+    c, params = cases["triangle"], PlannerParams()
+    step, lever = params.pivot_step, c.lever
+
+    def slide_margin(theta: float) -> float:
+        motion = Motion.SLIDE_GROUND_NEG
+        return statics.best_wrench(c.truth.statics, theta, c.truth.s_h, motion, lever, FORCES).margin
+
+    tilts = (math.radians(-deg) for deg in np.arange(0.0, 60.0, 0.5))
+    end = next(theta for theta in tilts if slide_margin(theta) >= 1.5)
+    start = end + math.radians(3.0) + 2 * step  # the grid from here stops 3° short of the end
+    reach = (end, c.reach[1])
+    grid = [start - k * step for k in range(3)]
+    assert all(slide_margin(theta) < params.margin for theta in grid)
+    cut = Case(dataclasses.replace(c.truth, theta_o=start), reach, lever)
+    answer = oracle_plan(c.truth.statics, start_of(cut), GOALS["ground −"], 0.0, reach, lever, FORCES, params,
+                         face=c.truth.s_h_range)
+    assert answer.status == "reached", answer.reason
+    assert_plan_keeps_margin(cut, answer.motions, params)
+    tilt = start + sum(step.delta for step in answer.motions if step.kind == "pivot")
+    assert tilt == pytest.approx(end, abs=1e-9)
+    assert [s.kind for s in answer.motions][-1] == "slide_ground"

@@ -467,6 +467,43 @@ def test_node_configuration_is_the_start_plus_whole_steps() -> None:
         assert abs(near_s_h - s_h) <= 0.002 + 1e-12
 
 
+@pytest.mark.parametrize("end_pivot", [math.radians(0.7), math.radians(2.5)])
+def test_end_nodes_are_the_range_ends_one_partial_pivot_beyond_the_grid(end_pivot: float) -> None:
+    """With ``end_pivot``, each end of the ``θ_o`` range further than ``end_pivot`` beyond the grid's
+    outermost node is a node of its own, one index on: its configuration is the end itself, nothing
+    lies beyond it, and the pivot to it is the partial increment with the margin of direct LPs at both
+    of its ends. An end closer to the grid than ``end_pivot`` adds no node; without ``end_pivot``, the
+    plain grid."""
+    setup = small_grid("triangle", -0.0107, 0.015, PLAN_MARGIN)
+    step = setup.graph.params.pivot_step
+    theta_0, s_h_0 = setup.graph.start
+    low, high = theta_0 - 2 * step - math.radians(2.0), theta_0 + step + math.radians(5.0)
+    params = dataclasses.replace(setup.graph.params, theta_range=(low, high), end_pivot=end_pivot)
+    known, lever, forces = setup.reference.known, setup.graph.lever, setup.graph.force_limits
+    graph = ConfigurationGraph(known, setup.graph.start, lever, forces, params)
+    plain = ConfigurationGraph(
+        known, setup.graph.start, lever, forces, dataclasses.replace(params, end_pivot=None)
+    )
+    for i in range(-2, 2):  # the grid within the range is unchanged
+        assert graph.configuration(Node(i, 0)) == plain.configuration(Node(i, 0))
+    assert graph.configuration(Node(2, 0)) == (high, s_h_0)  # 5° beyond 1 step: always a node
+    assert graph.inside(Node(2, 0)) and not graph.inside(Node(3, 0)) and not plain.inside(Node(2, 0))
+    assert graph.inside(Node(-3, 0)) == (end_pivot < math.radians(2.0))  # 2° beyond 2 steps
+    if graph.inside(Node(-3, 0)):
+        assert graph.configuration(Node(-3, 0)) == (low, s_h_0)
+    assert not graph.inside(Node(-4, 0))
+    direct = [
+        statics.best_wrench(known, theta, s_h_0, Motion.PIVOT, lever, forces).margin
+        for theta in (theta_0 + step, high)
+    ]
+    pivots = [edge for edge in graph.edges(Node(1, 0)) if edge.kind == "pivot" and edge.delta > 0.0]
+    assert min(direct) >= params.min_margin  # the triangle pivots there
+    (edge,) = pivots
+    assert edge.target == Node(2, 0)
+    assert edge.delta == pytest.approx(high - theta_0 - step, abs=1e-12)
+    assert edge.margin == pytest.approx(min(direct), rel=1e-9, abs=1e-9)
+
+
 # --- margins and edges ------------------------------------------------------------------------------
 
 

@@ -1,7 +1,9 @@
 """The graph of contact configurations and the motions between them that the statics allow.
 
 Nodes are configurations ``(θ_o, s_h)`` on a grid around a start: ``θ_o`` in steps of the paper's
-pivot (7.2°), ``s_h`` in steps of :attr:`GraphParams.s_h_step` (the hand slide is a multiple of it). The
+pivot (7.2°), ``s_h`` in steps of :attr:`GraphParams.s_h_step` (the hand slide is a multiple of it),
+and, where :attr:`GraphParams.end_pivot` says so, the ends of the ``θ_o`` range beyond the grid's
+outermost nodes (a partial pivot takes the object there). The
 ground slide does not change ``(θ_o, s_h)``: it is a loop on a node that moves ``s_g``, which the
 statics do not depend on. An edge is a motion whose statics (:func:`ccopt.statics.best_wrench`) have a
 margin of at least :attr:`GraphParams.min_margin` at both ends and in between (a hand slide and a pivot
@@ -37,6 +39,13 @@ class GraphParams:
         theta_range: ``(θ_min, θ_max)`` the robot may take the object to.
         s_h_range: ``(s_h_min, s_h_max)`` over which the whole hand lies on the face.
         min_margin: margin every point of an edge needs.
+        end_pivot: where an end of ``theta_range`` lies further than this (rad) beyond the grid's
+            outermost node, the end is a node of its own, one partial pivot on (None: no such
+            nodes). The range's ends are often where the object's tipping point cuts it, and the
+            motions that need the largest tilt, a ground slide against the tilt's way, are possible
+            only there: on a goals-study triangle that lands on a face at −23.8°, its slide towards
+            −s_g needed a tilt below about −20° (the estimate's statics), and the grid from 10°
+            stopped at −18.8°.
     """
 
     pivot_step: float = math.radians(7.2)
@@ -46,6 +55,7 @@ class GraphParams:
     theta_range: tuple[float, float] = (math.radians(-40.0), math.radians(50.0))
     s_h_range: tuple[float, float] = (-0.05, 0.05)
     min_margin: float = 1.0
+    end_pivot: float | None = None
 
     def __post_init__(self) -> None:
         for name in ("pivot_step", "s_h_step", "ground_slide"):
@@ -59,11 +69,14 @@ class GraphParams:
             raise ValueError(f"min_margin must be a finite number of N, got {self.min_margin!r}")
         if not (self.theta_range[0] <= self.theta_range[1] and self.s_h_range[0] <= self.s_h_range[1]):
             raise ValueError(f"empty ranges: θ {self.theta_range}, s_h {self.s_h_range}")
+        if self.end_pivot is not None and not (math.isfinite(self.end_pivot) and self.end_pivot >= 0.0):
+            raise ValueError(f"end_pivot must be a non-negative angle in rad or None, got {self.end_pivot!r}")
 
 
 @dataclass(frozen=True, order=True)
 class Node:
-    """A grid configuration: ``θ_o = θ_start + i · pivot_step``, ``s_h = s_h_start + j · s_h_step``."""
+    """A grid configuration: ``θ_o = θ_start + i · pivot_step`` (an end node: the end of the range),
+    ``s_h = s_h_start + j · s_h_step``."""
 
     i: int
     j: int
@@ -140,11 +153,13 @@ class ConfigurationGraph:
         self._barred = barred
         self._stride = round(self.params.hand_slide / self.params.s_h_step)
         self._margins: dict[tuple[Node, Motion], float] = {}
+        self._ends = _end_nodes(start[0], self.params)
 
     def configuration(self, node: Node) -> tuple[float, float]:
         """``(θ_o, s_h)`` of a node, rad and m."""
+        theta = self._ends.get(node.i)
         return (
-            self.start[0] + node.i * self.params.pivot_step,
+            self.start[0] + node.i * self.params.pivot_step if theta is None else theta,
             self.start[1] + node.j * self.params.s_h_step,
         )
 
@@ -197,6 +212,8 @@ class ConfigurationGraph:
             return
         margin = min(self.margin(n, motion) for n in path)
         if margin >= self.params.min_margin:
+            if kind == "pivot":  # a partial pivot to or from an end node
+                delta = self.configuration(path[-1])[0] - self.configuration(node)[0]
             yield Edge(kind, delta, node, path[-1], margin)
 
     def shortest_path(
@@ -226,6 +243,23 @@ class ConfigurationGraph:
                     heapq.heappush(frontier, (total, counter, edge.target))
                     counter += 1
         return None
+
+
+def _end_nodes(theta_start: float, params: GraphParams) -> dict[int, float]:
+    """``{i: θ}`` of the end nodes (:attr:`GraphParams.end_pivot`): the index one step beyond the
+    grid's outermost node within the range, where the range's end lies further on than
+    ``end_pivot``, and that end. None on a range that does not hold the start."""
+    low, high = params.theta_range
+    if params.end_pivot is None or not low - 1e-9 <= theta_start <= high + 1e-9:
+        return {}
+    step, ends = params.pivot_step, {}
+    for end, way in zip(params.theta_range, (-1, 1), strict=True):
+        outermost = math.floor(way * (end - theta_start) / step + 1e-9) * way
+        if way * (theta_start + outermost * step - end) > 1e-9:  # rounding put it past the end
+            outermost -= way
+        if abs(end - (theta_start + outermost * step)) > params.end_pivot:
+            ends[outermost + way] = end
+    return ends
 
 
 def _unwind(came: dict[Node, tuple[Node, Edge] | None], node: Node) -> list[Edge]:

@@ -179,6 +179,7 @@ def _graph(
         theta_range=(low, high),
         s_h_range=band,
         min_margin=params.margin,
+        end_pivot=DEFAULT_TOLERANCE["pivot"],
     )
     return ConfigurationGraph(statics_of, (theta, s_h), lever, force_limits, grid, barred=barred)
 
