@@ -435,6 +435,8 @@ def test_graph_params_accept_a_single_s_h_and_equal_steps() -> None:
         ({"min_margin": math.nan}, "min_margin"),
         ({"pivot_step": 0.0}, "pivot_step"),
         ({"ground_slide": -0.01}, "ground_slide"),
+        ({"end_pivot": -0.01}, "end_pivot"),
+        ({"end_pivot": math.nan}, "end_pivot"),
     ],
 )
 def test_graph_params_errors_name_the_bad_field(options: dict[str, float], name: str) -> None:
