@@ -248,7 +248,7 @@ class ConfigurationGraph:
 def _end_nodes(theta_start: float, params: GraphParams) -> dict[int, float]:
     """``{i: θ}`` of the end nodes (:attr:`GraphParams.end_pivot`): the index one step beyond the
     grid's outermost node within the range, where the range's end lies further on than
-    ``end_pivot``, and that end. None on a range that does not hold the start (an empty dict)."""
+    ``end_pivot``, and that end; none without ``end_pivot`` or on a range that does not hold the start."""
     low, high = params.theta_range
     if params.end_pivot is None or not low - 1e-9 <= theta_start <= high + 1e-9:
         return {}

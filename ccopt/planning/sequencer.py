@@ -180,12 +180,12 @@ class GoalSequencer:
         self.misses = 0 if last_status in (None, "reached") else self.misses + 1
         if self._last is not None and last_status not in (None, "reached"):
             step, tilt = self._last
+            way = 1 if step.delta > 0 else -1
             if step.kind == "slide_ground":
-                self.failed_slides[1 if step.delta > 0 else -1] = tilt
+                self.failed_slides[way] = tilt
             if step.kind == "slide_hand" and last_status in HELD:
-                self.failed_hand_slides.setdefault(1 if step.delta > 0 else -1, []).append(tilt)
+                self.failed_hand_slides.setdefault(way, []).append(tilt)
             if step.kind == "pivot" and last_status == "rolled":
-                way = 1 if step.delta > 0 else -1
                 self.tilt_limits[way] = tilt_limit(tilt, roll_tilt, way)
         if now - self.start_time >= self.goal.timeout:
             return self.end(now, "timeout", f"the goal's {self.goal.timeout:g} s ran out")
