@@ -204,7 +204,7 @@ def draw(fmap: FeasibilityMap, path: str | Path | None = None, title: str = "", 
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from ccopt.plots import PNG_OPTIONS
+    from ccopt.plots import save_png
 
     rows = len(fmap.motions)
     figure = Figure(figsize=(8.0, 2.0 * rows + 0.8))
@@ -246,7 +246,7 @@ def draw(fmap: FeasibilityMap, path: str | Path | None = None, title: str = "", 
         fontsize=8,
     )
     if path is not None:
-        figure.savefig(path, dpi=dpi, pil_kwargs=PNG_OPTIONS)
+        save_png(figure, path, dpi)
     return figure
 
 

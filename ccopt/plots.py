@@ -722,16 +722,28 @@ PNG_OPTIONS = {"compress_level": 1}
 half of the time of Pillow's default (6), the files 5–25 % larger; the pixels are the same."""
 
 
+def save_png(fig: Figure, path: str | Path, dpi: int = 100) -> Path:
+    """Write ``fig`` (on an Agg canvas) as a PNG at ``dpi``, drawn once; its path.
+
+    The same pixels as ``fig.savefig(path, dpi=dpi)`` (tested) in two thirds to four fifths of the
+    time: ``savefig`` draws a figure that has a layout engine twice, a pass that lays it out and
+    then the one that renders it, which lays it out again; the constrained layout of this module's
+    figures is a third to a half of each draw."""
+    fig.set_dpi(dpi)
+    canvas = fig.canvas
+    canvas.draw()
+    size = canvas.get_width_height(physical=True)
+    image = Image.frombuffer("RGBA", size, canvas.buffer_rgba(), "raw", "RGBA", 0, 1)
+    image.save(path, format="png", **PNG_OPTIONS)
+    return Path(path)
+
+
 def write_stills(run: Run, folder: str | Path, dpi: int = 100) -> list[Path]:
     """Write the still figures of :data:`FIGURES` into ``folder`` (created if needed); their paths."""
     record = as_record(run)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for name, draw in FIGURES.items():
-        draw(record).savefig(folder / name, dpi=dpi, pil_kwargs=PNG_OPTIONS)
-        paths.append(folder / name)
-    return paths
+    return [save_png(draw(record), folder / name, dpi) for name, draw in FIGURES.items()]
 
 
 def write_moving(run: Run, folder: str | Path) -> list[Path]:

@@ -290,6 +290,21 @@ def test_write_figures_writes_images_pil_can_open(tmp_path):
     assert paths[-1].stat().st_size < 2_000_000
 
 
+@pytest.mark.parametrize("name", list(plots.FIGURES))
+def test_a_still_is_saved_with_the_pixels_savefig_gives(run, tmp_path, name):
+    """save_png draws once what Matplotlib's savefig draws twice (a constrained layout pass, then
+    the rendering): the same image, pixel for pixel, and the figure keeps its layout engine."""
+    draw = plots.FIGURES[name]
+    draw(run).savefig(tmp_path / "savefig.png", dpi=80)
+    figure = draw(run)
+    assert figure.get_layout_engine() is not None
+    assert plots.save_png(figure, tmp_path / name, dpi=80) == tmp_path / name
+    with Image.open(tmp_path / "savefig.png") as expected, Image.open(tmp_path / name) as saved:
+        width, height = figure.get_size_inches() * 80
+        assert saved.size == expected.size == (round(width), round(height))
+        assert np.array_equal(np.asarray(saved), np.asarray(expected))
+
+
 def test_the_gif_shows_each_frame_as_given(tmp_path):
     """Frames that keep only their changed pixels (the rest transparent) decode to the still image
     with each part over its region: a square moving over a two-colour background and back, a pixel
