@@ -512,3 +512,33 @@ def test_a_ground_slide_possible_only_past_the_grid_is_planned_at_the_reach_end(
     tilt = start + sum(step.delta for step in answer.motions if step.kind == "pivot")
     assert tilt == pytest.approx(end, abs=1e-9)
     assert [s.kind for s in answer.motions][-1] == "slide_ground"
+
+
+def test_a_ground_slide_whose_tilts_lie_between_the_grids_nodes_is_planned_there(
+    cases: dict[str, Case],
+) -> None:
+    """At a 7 N margin the triangle's ground slide towards +s_g keeps it only from about 32°, its
+    pivots only up to about 34.5°: a window narrower than a pivot step, which the grid from most
+    start tilts steps over. From every start the planner pivots into the window and slides there.
+    Direct LPs every 0.1°: the window, that some starts' grid tilts all miss it, and that every
+    planned motion keeps the margin."""
+    c, params = cases["triangle"], PlannerParams(margin=7.0)
+
+    def margin(theta: float, motion: Motion) -> float:
+        return statics.best_wrench(c.truth.statics, theta, c.truth.s_h, motion, c.lever, FORCES).margin
+
+    tilts = np.radians(np.arange(10.0, 50.0, 0.1))
+    window = [t for t in tilts if min(margin(t, Motion.SLIDE_GROUND_POS), margin(t, Motion.PIVOT)) >= 7.0]
+    assert window and window[-1] - window[0] < 0.6 * params.pivot_step
+    assert all(margin(t, Motion.PIVOT) >= 7.0 for t in tilts if t <= window[0])
+    missed = 0
+    for start in np.radians(np.arange(10.0, 17.5, 0.5)):
+        grid = start + params.pivot_step * np.arange(6)
+        missed += not any(window[0] <= t <= window[-1] for t in grid)
+        moved = Case(dataclasses.replace(c.truth, theta_o=float(start)), c.reach, c.lever)
+        answer = oracle_plan(c.truth.statics, start_of(moved), GOALS["ground +"], 0.0, c.reach, c.lever,
+                             FORCES, params, face=c.truth.s_h_range)
+        assert answer.status == "reached", (math.degrees(start), answer.reason)
+        assert_plan_keeps_margin(moved, answer.motions, params)
+        assert "slide_ground" in [step.kind for step in answer.motions]
+    assert missed >= 5

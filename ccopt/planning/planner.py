@@ -8,6 +8,8 @@ grid with 10 mm hand slides; a ground slide is a loop on a node) and
 
 1. if the goal moves the ground contact (``s_g``) by more than its tolerance, goes to the nearest
    node where a ground slide that way is possible with margin, and slides (10 mm, or what is left);
+   where no node has one, pivots towards the nearest tilt between the nodes that has
+   (:func:`pivot_between_nodes`);
 2. else goes to the node nearest the goal's ``(θ_o, s_h)`` by the fewest motions;
 3. from there, closes the rest with one partial pivot or hand slide, if the statics allow it.
 
@@ -219,13 +221,20 @@ def _towards_ground(
     tried = failed.get(int(sign))
     beyond = 0.5 * graph.params.pivot_step
 
+    def allowed(theta: float) -> bool:
+        return tried is None or (theta - tried) * sign >= beyond
+
     def slides(node: Node) -> Edge | None:
-        if tried is not None and (graph.configuration(node)[0] - tried) * sign < beyond:
+        if not allowed(graph.configuration(node)[0]):
             return None
         return next((e for e in graph.edges(node) if e.kind == "slide_ground" and e.delta * sign > 0.0), None)
 
     path = graph.shortest_path(Node(0, 0), lambda node: slides(node) is not None, _motion_cost)
     if path is None:
+        slide = Motion.SLIDE_GROUND_POS if sign > 0.0 else Motion.SLIDE_GROUND_NEG
+        pivot = pivot_between_nodes(graph, slide, allowed)
+        if pivot is not None:
+            return Plan("move", _step("pivot", pivot, params))
         return Plan(
             "unreachable",
             reason=f"s_g {_length(goal.s_g)}: no ground slide {towards(sign, 's_g')} is possible at any tilt "
@@ -235,6 +244,44 @@ def _towards_ground(
         return _move(path[0], params, tuple(path))
     length = sign * min(abs(error), graph.params.ground_slide)
     return Plan("move", _step("slide_ground", length, params), path=(slides(Node(0, 0)),))
+
+
+FINE_PIVOTS = 4
+"""Points per pivot step at which :func:`pivot_between_nodes` looks between the grid's tilts."""
+
+
+def pivot_between_nodes(
+    graph: ConfigurationGraph, motion: Motion, allowed: Callable[[float], bool]
+) -> float | None:
+    """The pivot (rad, at most a grid step) towards the nearest tilt where ``motion`` keeps the
+    graph's margin, looked for every ``pivot_step / FINE_PIVOTS`` from the graph's start at its
+    ``s_h``, through tilts where a pivot keeps the margin too and within the graph's ``θ_o`` range;
+    ``allowed(θ_o)`` may rule tilts out. None where there is no such tilt.
+
+    Where the grid has no node with the motion, its tilts may lie between nodes: a ground slide
+    against the tilt's way is possible only past a tilt, and a pivot only short of another, and the
+    window between them can be narrower than a pivot step. On a goals-study triangle (μ_g 0.40)
+    the estimate allowed a slide towards −s_g from 5° down and a pivot to −3°; the grid from 38.3°
+    had nodes at 2.3° (the slide's margin 0.8 N) and −4.9° (the pivot's 0.6 N), and the goal was
+    reported unreachable where the oracle reached it."""
+    theta, s_h = graph.start
+    (low, high), least = graph.params.theta_range, graph.params.min_margin
+    step = graph.params.pivot_step / FINE_PIVOTS
+    if graph.margin_at(theta, s_h, Motion.PIVOT) < least:
+        return None
+    nearest: float | None = None
+    for way in (1.0, -1.0):
+        for k in range(1, FINE_PIVOTS * math.ceil((high - low) / graph.params.pivot_step) + 1):
+            tilt = theta + way * k * step
+            if not low - 1e-9 <= tilt <= high + 1e-9 or graph.margin_at(tilt, s_h, Motion.PIVOT) < least:
+                break
+            if allowed(tilt) and graph.margin_at(tilt, s_h, motion) >= least:
+                if nearest is None or k * step < abs(nearest):
+                    nearest = way * k * step
+                break
+    if nearest is None:
+        return None
+    return math.copysign(min(abs(nearest), graph.params.pivot_step), nearest)
 
 
 def _towards_configuration(
