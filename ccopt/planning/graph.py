@@ -172,7 +172,10 @@ class ConfigurationGraph:
 
     def inside(self, node: Node) -> bool:
         """Whether a node lies within the ranges (and the caller's reach)."""
-        theta, s_h = self.configuration(node)
+        return self.inside_at(*self.configuration(node))
+
+    def inside_at(self, theta: float, s_h: float) -> bool:
+        """Whether any ``(θ_o, s_h)`` (rad, m) lies within the ranges (and the caller's reach)."""
         (t_lo, t_hi), (s_lo, s_hi) = self.params.theta_range, self.params.s_h_range
         if not (t_lo - 1e-9 <= theta <= t_hi + 1e-9 and s_lo - 1e-9 <= s_h <= s_hi + 1e-9):
             return False

@@ -255,30 +255,29 @@ def pivot_between_nodes(
 ) -> float | None:
     """The pivot (rad, at most a grid step) towards the nearest tilt where ``motion`` keeps the
     graph's margin, looked for every ``pivot_step / FINE_PIVOTS`` from the graph's start at its
-    ``s_h``, through tilts where a pivot keeps the margin too and within the graph's ``θ_o`` range;
-    ``allowed(θ_o)`` may rule tilts out. None where there is no such tilt.
+    ``s_h``, through tilts where a pivot keeps the margin too and within the graph's ranges and reach
+    (:meth:`~ccopt.planning.graph.ConfigurationGraph.inside_at`); ``allowed(θ_o)`` may rule tilts
+    out. None where there is no such tilt.
 
     Where the grid has no node with the motion, its tilts may lie between nodes: a ground slide
     against the tilt's way is possible only past a tilt, and a pivot only short of another, and the
     window between them can be narrower than a pivot step. On a goals-study triangle (μ_g 0.40)
-    the estimate allowed a slide towards −s_g from 5° down and a pivot to −3°; the grid from 38.3°
+    the estimate allowed a slide towards −s_g from about 2° down and pivots to about −4°; the grid from 38.3°
     had nodes at 2.3° (the slide's margin 0.8 N) and −4.9° (the pivot's 0.6 N), and the goal was
     reported unreachable where the oracle reached it."""
     theta, s_h = graph.start
-    (low, high), least = graph.params.theta_range, graph.params.min_margin
-    step = graph.params.pivot_step / FINE_PIVOTS
+    least, step = graph.params.min_margin, graph.params.pivot_step / FINE_PIVOTS
     if graph.margin_at(theta, s_h, Motion.PIVOT) < least:
         return None
     nearest: float | None = None
     for way in (1.0, -1.0):
-        for k in range(1, FINE_PIVOTS * math.ceil((high - low) / graph.params.pivot_step) + 1):
-            tilt = theta + way * k * step
-            if not low - 1e-9 <= tilt <= high + 1e-9 or graph.margin_at(tilt, s_h, Motion.PIVOT) < least:
-                break
+        tilt = theta + way * step
+        while graph.inside_at(tilt, s_h) and graph.margin_at(tilt, s_h, Motion.PIVOT) >= least:
             if allowed(tilt) and graph.margin_at(tilt, s_h, motion) >= least:
-                if nearest is None or k * step < abs(nearest):
-                    nearest = way * k * step
+                if nearest is None or abs(tilt - theta) < abs(nearest):
+                    nearest = tilt - theta
                 break
+            tilt += way * step
     if nearest is None:
         return None
     return math.copysign(min(abs(nearest), graph.params.pivot_step), nearest)
