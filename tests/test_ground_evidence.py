@@ -292,6 +292,25 @@ class Run:
         return estimates, hull
 
 
+def common_sample(
+    phase: str, time: float, s_h: float
+) -> tuple[float, list[float], ContactConfiguration, float]:
+    """``(θ_h, wrench, command, s_h)`` of a synthetic run's common phases at ``time`` (s): sticking
+    with ``f_n`` 10 ± 4 N and a small ``f_t`` and ``τ``; in ``"explore hand"`` the hand sliding both
+    ways at 20 mm/s on its friction limit (``s_h`` moves); in ``"pivot"`` turning ±8°."""
+    swing = math.sin(2.0 * math.pi * time / 0.5)
+    f_n = 10.0 + 4.0 * math.sin(2.0 * math.pi * time / 0.37)
+    theta, wrench, command = 0.0, [f_n, 0.2 * MU_H * f_n * swing, 0.2 * L_H * f_n * swing], STICKING
+    if phase == "explore hand":
+        way = 1 if swing >= 0.0 else -1
+        wrench[1] = -way * MU_H * f_n
+        s_h += way * 0.02 / RATE
+        command = ContactConfiguration(hand_mode=ContactMode(way))
+    elif phase == "pivot":
+        theta = math.radians(8.0) * math.sin(2.0 * math.pi * time / 2.0)
+    return theta, wrench, command, s_h
+
+
 def slide_run(seed: int = 0) -> Run:
     """The hand explores its friction (sliding both ways), pivots ±8°, then the ground is commanded to
     slide to +x and, after a pivot, to −x (2000 samples each at 1 kHz): sliding wrenches on the true
@@ -303,19 +322,9 @@ def slide_run(seed: int = 0) -> Run:
     for phase in ("explore hand", "pivot", "slide +", "pivot", "slide -"):
         for k in range(2000):
             time += 1.0 / RATE
-            swing, f_n = (
-                math.sin(2.0 * math.pi * time / 0.5),
-                10.0 + 4.0 * math.sin(2.0 * math.pi * time / 0.37),
-            )
-            theta, wrench, command = 0.0, [f_n, 0.2 * MU_H * f_n * swing, 0.2 * L_H * f_n * swing], STICKING
-            if phase == "explore hand":
-                way = 1 if swing >= 0.0 else -1
-                wrench[1] = -way * MU_H * f_n
-                s_h += way * 0.02 / RATE
-                command = ContactConfiguration(hand_mode=ContactMode(way))
-            elif phase == "pivot":
-                theta = math.radians(8.0) * math.sin(2.0 * math.pi * time / 2.0)
-            else:
+            theta, wrench, command, s_h = common_sample(phase, time, s_h)
+            f_n = wrench[0]
+            if phase.startswith("slide"):
                 way = 1 if phase == "slide +" else -1
                 row = 0 if way > 0 else 1
                 force = np.array([(ground_b[row] + ground_a[row, 1] * f_n) / ground_a[row, 0], -f_n])
@@ -423,6 +432,85 @@ def test_a_sticking_command_keeps_a_hull_edge_from_being_fitted_while_s_g_jitter
     assert min(largest_moves(s_g)) >= distance
     assert hull[-1] == (True, True)
     assert all(e.ground_fitted == (False, False) and math.isnan(e.mu_g) for e in estimates)
+
+
+SLIP_MU_G = 0.4
+"""The ground friction of :func:`slip_run`: low enough that the ground gives before the hand."""
+
+
+def slip_run(tilt_deg: float, way: int, mu_g: float = SLIP_MU_G, hand_at_limit: bool = False) -> Run:
+    """A hand slide that slides the ground instead: the hand pivots ±8°, then explores its friction
+    (2000 samples each), turns to ``tilt_deg`` (500),
+    then is commanded to slide towards ``−way`` while it presses the object along the ground towards
+    ``way`` (2000: the first ``HOLD`` at 60 % of the ground's friction, then on its true face while
+    the ground contact moves 20 mm/s, on a ground of friction ``mu_g``), the hand sticking on the
+    object all along, by more than the force noise. With ``hand_at_limit`` the wrench of the slip is
+    at the hand's friction limit instead (``|f_t| = μ_h f_n``, the hand's own slide), the poses the
+    same."""
+    rng, run = np.random.default_rng(0), Run()
+    rows, bounds = contact.model_ground_rows(mu_g, MASS)
+    row = 0 if way > 0 else 1
+    r_o, s_h, time, tilt = np.array([0.10, 0.0]), 0.01, 0.0, math.radians(tilt_deg)
+    hand_slide = ContactConfiguration(hand_mode=ContactMode(-way))
+    for phase, samples in (("pivot", 2000), ("explore hand", 2000), ("turn", 500), ("slip", 2000)):
+        for k in range(samples):
+            time += 1.0 / RATE
+            theta, wrench, command, s_h = common_sample(phase, time, s_h)
+            f_n = wrench[0]
+            if phase == "turn":
+                theta = tilt * k / samples
+            elif phase == "slip":
+                theta, command = tilt, hand_slide
+                share = 0.6 if k < HOLD else 1.0
+                force = np.array([share * (bounds[row] + rows[row, 1] * f_n) / rows[row, 0], -f_n])
+                wrench = geometry.wrench_world_to_hand(theta, [*force, 0.0])
+                assert abs(wrench[1]) <= MU_H * wrench[0] - 0.5  # the hand sticks (beyond the noise)
+                if hand_at_limit:
+                    wrench[1] = math.copysign(MU_H * wrench[0], wrench[1])
+                if k >= HOLD:
+                    r_o = r_o + np.array([way * 0.02 / RATE, 0.0])
+            run.add(rng, time, theta, s_h, r_o, wrench, command, phase)
+    return run
+
+
+@pytest.mark.parametrize("way", [1, -1])
+def test_a_ground_that_slid_in_a_hand_slide_counts_as_slid_that_way_where_the_tilt_tells_it(way):
+    """Commanded to slide the hand, the ground slid instead, 34 mm at 17°: the side it slid towards
+    is fitted (the hull's face: within 1 N of the true face over the slip's pressing forces; it lies
+    outside by about two standard deviations of the force noise), the other not, and nothing is
+    fitted before the slip began. At 3° the pose cannot tell the ground's slide from the hand's
+    (``position_noise / sin θ`` > ``valid_std``): nothing is fitted (on a ground of μ_g 0.25, where
+    the hand still sticks at that tilt)."""
+    side = 0 if way > 0 else 1
+    run = slip_run(17.0 * way, way)
+    estimates, _ = run.estimates()
+    slip = run.phases.index("slip") + HOLD
+    assert estimates[slip - 1].kinematics_valid
+    assert all(e.ground_fitted == (False, False) for e in estimates[:slip])
+    last = estimates[-1]
+    assert last.s_g - estimates[slip - 1].s_g == pytest.approx(way * 0.034, abs=0.003)
+    assert last.ground_fitted[side] and not last.ground_fitted[1 - side]
+    faces, offsets, known = last.friction_faces
+    assert known == (True, True)
+    rows, bounds = contact.model_ground_rows(SLIP_MU_G, MASS)
+    for f_y in (-6.0, -10.0, -14.0):  # the pressing forces of the slip
+        fitted = (offsets[side] - faces[side, 1] * f_y) / faces[side, 0]
+        true = (bounds[side] - rows[side, 1] * f_y) / rows[side, 0]
+        assert fitted == pytest.approx(true, abs=1.0)
+    flat_estimates, _ = slip_run(3.0 * way, way, mu_g=0.25).estimates()
+    assert all(e.ground_fitted == (False, False) for e in flat_estimates)
+
+
+@pytest.mark.parametrize("way", [1, -1])
+def test_a_ground_followed_while_the_hand_is_at_its_friction_limit_does_not_count(way):
+    """The same poses with the hand's forces at its friction limit: either contact may have given
+    (on the paper rectangle the kinematics followed a ground that stood still in the hand's own
+    slide), so nothing is fitted, though the kinematics follow the ground as before."""
+    run = slip_run(17.0 * way, way, hand_at_limit=True)
+    estimates, _ = run.estimates()
+    slip = run.phases.index("slip") + HOLD
+    assert estimates[-1].s_g - estimates[slip - 1].s_g == pytest.approx(way * 0.034, abs=0.003)
+    assert all(e.ground_fitted == (False, False) for e in estimates)
 
 
 @pytest.mark.parametrize("side", [0, 1])
