@@ -440,13 +440,12 @@ SLIP_MU_G = 0.4
 
 def slip_run(tilt_deg: float, way: int, mu_g: float = SLIP_MU_G, hand_at_limit: bool = False) -> Run:
     """A hand slide that slides the ground instead: the hand pivots ±8°, then explores its friction
-    (2000 samples each), turns to ``tilt_deg`` (500),
-    then is commanded to slide towards ``−way`` while it presses the object along the ground towards
-    ``way`` (2000: the first ``HOLD`` at 60 % of the ground's friction, then on its true face while
-    the ground contact moves 20 mm/s, on a ground of friction ``mu_g``), the hand sticking on the
-    object all along, by more than the force noise. With ``hand_at_limit`` the wrench of the slip is
-    at the hand's friction limit instead (``|f_t| = μ_h f_n``, the hand's own slide), the poses the
-    same."""
+    (2000 samples each), turns to ``tilt_deg`` (500), then is commanded to slide towards ``−way``
+    while it presses the object along the ground towards ``way`` (2000: the first ``HOLD`` at 60 % of
+    the ground's friction, then on its true face while the ground contact moves 20 mm/s, on a ground
+    of friction ``mu_g``), the hand sticking on the object all along, by more than the force noise.
+    With ``hand_at_limit`` the wrench of the slip is at the hand's friction limit instead
+    (``|f_t| = μ_h f_n``, the hand's own slide), the poses the same."""
     rng, run = np.random.default_rng(0), Run()
     rows, bounds = contact.model_ground_rows(mu_g, MASS)
     row = 0 if way > 0 else 1

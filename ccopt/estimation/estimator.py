@@ -384,9 +384,15 @@ class Estimator:
         unable to tell which contact slid (:func:`either_slides`): the hand has slid before, so
         ``μ̂_h`` is its limit and not merely a lower bound, and the tilt is so small that the pose
         separates the two slides by less than ``valid_std`` (``position_noise / |sin θ|``)."""
-        kinematics = self.params.kinematics
         measured = self.hand_slides.slid[0] or self.hand_slides.slid[1]
-        return measured and abs(math.sin(theta_h)) * kinematics.valid_std < kinematics.position_noise
+        return measured and not self._split_observable(theta_h)
+
+    def _split_observable(self, theta_h: float) -> bool:
+        """Whether the tilt separates a ground slide from a hand slide along the face by at least
+        ``valid_std`` in the pose: their difference is ``sin θ`` of the motion, so ``|sin θ| valid_std
+        ≥ position_noise`` (about 10° at the defaults)."""
+        kinematics = self.params.kinematics
+        return abs(math.sin(theta_h)) * kinematics.valid_std >= kinematics.position_noise
 
     def _rough(
         self, theta_o: float, kinematics: KinematicEstimate
@@ -445,15 +451,14 @@ class Estimator:
     def _ground_gave(self, hand: ContactMode | None, likely: ContactConfiguration, theta_h: float) -> bool:
         """Whether a ground the kinematics follow in a commanded hand slide is the contact that gave:
         the forces keep the hand inside its friction cone (``likely``; ``μ̂_h`` is at most the true
-        friction, so the hand stuck) and the tilt separates a ground slide from a hand slide by at
-        least ``valid_std`` (``position_noise / |sin θ|``, as :meth:`_split_unobservable`). A hand at
+        friction, so the hand stuck) and the tilt tells the two slides apart
+        (:meth:`_split_observable`). A hand at
         its limit does not tell: on the paper rectangle the exploration's hand slide (+3 mm at
         16.6°, the ground still) had the kinematics follow the ground, whose estimate wandered ±1 mm
         a sample and drifted 3 mm with the hand's own slide."""
         if hand is None or hand == _STICK or likely.hand_mode != _STICK:
             return False
-        kinematics = self.params.kinematics
-        return abs(math.sin(theta_h)) * kinematics.valid_std >= kinematics.position_noise
+        return self._split_observable(theta_h)
 
     def _skip(self, time: float) -> Estimate:
         if self._last is None:
