@@ -627,9 +627,8 @@ class Supervision:
         max_time: a time limit given outright (s of simulated time), None for the one above.
         health_tolerance, health_hold: the force disagreement (N) between the F/T sensor and the
             impedance that a run tolerates, and for how long (s), before it is a sensor fault
-            (:mod:`ccopt.health`). The hand's inertia makes the two differ while it accelerates: up to
-            6 N for 50 ms when a steeply tilted object slipped on the ground (measured on a hexagon
-            at 55°), 1.6 N on quiet runs.
+            (:mod:`ccopt.health`). None: the plant's own
+            (:attr:`~ccopt.plant.base.Plant.force_model_error`, what its fault-free runs reach).
         solver_grace: the QP solver may give no finite step this long in a row (the target holds)
             before the run ends with status ``error``.
     """
@@ -640,23 +639,27 @@ class Supervision:
     recontact_distance: float = 0.02
     time_factor: float = 1.5
     min_time: float = 10.0
-    health_tolerance: float = 6.0
+    health_tolerance: float | None = None
     health_hold: float = 0.1
     solver_grace: float = 0.2
     max_time: float | None = None
 
     def __post_init__(self) -> None:
         names = ("contact_force", "contact_grace", "recontact_speed", "recontact_distance")
-        for name in (*names, "time_factor", "min_time", "health_tolerance", "health_hold", "solver_grace"):
+        for name in (*names, "time_factor", "min_time", "health_hold", "solver_grace"):
             validation.positive(name, getattr(self, name))
+        if self.health_tolerance is not None:
+            validation.positive("health_tolerance", self.health_tolerance)
         if self.max_time is not None and not 0.0 < validation.real("max_time", self.max_time) <= 1e6:
             raise ValueError(f"max_time must be in (0, 1e6] s, got {self.max_time!r}")
 
-    def health(self, hand: Hand) -> HealthParams:
-        """The sensor-health check of a run with ``hand``: its impedance, and a force disagreement
-        tolerated up to ``health_tolerance`` (N) for ``health_hold`` (s)."""
+    def health(self, hand: Hand, force_model_error: float) -> HealthParams:
+        """The sensor-health check of a run with ``hand`` on a plant whose force strays up to
+        ``force_model_error`` (N) from its impedance: that impedance, and a force disagreement
+        tolerated up to ``health_tolerance`` (the plant's if None) for ``health_hold`` (s)."""
+        tolerance = force_model_error if self.health_tolerance is None else self.health_tolerance
         return HealthParams.from_impedance(
-            hand.stiffness, hand.damping, force_tolerance=self.health_tolerance, hold=self.health_hold
+            hand.stiffness, hand.damping, force_tolerance=tolerance, hold=self.health_hold
         )
 
     def time_limit(self, schedule: Schedule) -> float:
@@ -703,7 +706,7 @@ class _Loop:
             params.hand.force_limits, p.normal_force, p.statics_margin, p.friction_step, p.slide_beyond,
             p.force_headroom,
         )
-        self.health = SensorHealth(params.supervision.health(params.hand))
+        self.health = SensorHealth(params.supervision.health(params.hand, self.plant.force_model_error))
         self.writer = RecordWriter(out, meta or {}) if out is not None else None
         self.folder = Path(out) if out is not None else None
         self.on_tick = on_tick

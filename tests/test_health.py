@@ -8,8 +8,12 @@ import numpy as np
 import pytest
 
 from ccopt import closed_loop, geometry
+from ccopt.closed_loop import Supervision
+from ccopt.hand import Hand
 from ccopt.health import FAULT_NAMES, OK, HealthParams, SensorHealth
 from ccopt.objects import make_object
+from ccopt.plant.mujoco_panda import PandaPlant
+from ccopt.plant.mujoco_planar import PlanarPlant
 from ccopt.plant.sensors import SensorParams, Sensors, parse_fault
 from ccopt.schedule import load_schedule
 
@@ -182,3 +186,27 @@ def test_bad_health_parameters_are_refused(kwargs: dict, message: str) -> None:
     with pytest.raises(ValueError, match=message):
         HealthParams(**kwargs)
     assert set(FAULT_NAMES) == {"dead", "stuck", "implausible", "pose_lost"}
+
+
+def test_a_run_tolerates_its_plants_own_force_model_error_unless_told_otherwise() -> None:
+    """The Panda's force strays further from the planar impedance than the planar plant's (the F/T
+    sensor at the flange, the arm's inertia): a run takes the plant's figure, or the one it is given."""
+    assert PandaPlant.force_model_error > PlanarPlant.force_model_error
+    hand = Hand()
+    assert Supervision().health(hand, PandaPlant.force_model_error).force_tolerance == 10.0
+    assert Supervision(health_tolerance=6.0).health(hand, 10.0).force_tolerance == 6.0
+    with pytest.raises(ValueError, match="health_tolerance"):
+        Supervision(health_tolerance=-1.0)
+
+
+@pytest.mark.parametrize(("fault", "status"), [(None, "completed"), ("scale-ft:0.1@1", "sensor_fault")])
+def test_on_the_panda_a_sound_sensor_runs_on_and_one_reading_a_tenth_stops_the_run(fault, status) -> None:
+    """With the Panda's wider tolerance the check still tells a sensor reading a tenth of the force
+    (from 1 s: the run stops within a quarter of a second) from a sound one. A sensor reading half
+    goes unseen there below about 20 N (the difference, 0.5 |f|, stays within 10 N + 0.1 |f|)."""
+    faults = () if fault is None else (parse_fault(fault),)
+    params = closed_loop.LoopParams(plant="panda", sensor_params=SensorParams(faults=faults))
+    result = closed_loop.run(make_object("paper-triangle"), load_schedule("smoke"), params, seed=0)
+    assert result.status == status, result.message
+    if fault is not None:
+        assert "differs from the impedance force" in result.message and result.sim_time < 1.3

@@ -143,6 +143,10 @@ class Plant(Protocol):
     hand: Hand
     hand_angle_range: tuple[float, float]
     """The hand angles ``θ_h`` (rad) the robot reaches; a target outside is refused."""
+    force_model_error: float
+    """N: how far the hand force may differ from the impedance model ``K e + D ė`` (filtered, for as
+    long as a sensor fault must last, :mod:`ccopt.health`) in fault-free runs of this plant: its
+    inertia, and on an arm the coupling of its axes. The sensor-health check tolerates this much."""
 
     def set_target(self, pose: ArrayLike, velocity: ArrayLike | None = None) -> None:
         """Hand impedance target, world ``(x, y, θ)`` (m, rad), with optional velocity feed-forward."""
