@@ -193,8 +193,9 @@ def test_a_run_tolerates_its_plants_own_force_model_error_unless_told_otherwise(
     sensor at the flange, the arm's inertia): a run takes the plant's figure, or the one it is given."""
     assert PandaPlant.force_model_error > PlanarPlant.force_model_error
     hand = Hand()
-    assert Supervision().health(hand, PandaPlant.force_model_error).force_tolerance == 10.0
-    assert Supervision(health_tolerance=6.0).health(hand, 10.0).force_tolerance == 6.0
+    panda = PandaPlant.force_model_error
+    assert Supervision().health(hand, panda).force_tolerance == panda
+    assert Supervision(health_tolerance=6.0).health(hand, panda).force_tolerance == 6.0
     with pytest.raises(ValueError, match="health_tolerance"):
         Supervision(health_tolerance=-1.0)
 

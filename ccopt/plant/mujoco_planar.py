@@ -95,6 +95,11 @@ class PlanarPlant(MujocoPlant):
         hand: the robot's hand (its length, impedance and body).
     """
 
+    force_model_error = 6.0
+    """N (:attr:`~ccopt.plant.base.Plant.force_model_error`): the hand's inertia makes the force
+    and the impedance differ while it accelerates, up to 6 N for 50 ms when a steeply tilted object
+    slipped on the ground (a hexagon at 55°), 1.6 N on quiet runs."""
+
     def _build(self) -> None:
         object_pose, hand_pose, _ = start_poses(self.obj, self.start, self.hand)
         target = start_target(self.obj, self.start, self.hand)
@@ -113,11 +118,6 @@ class PlanarPlant(MujocoPlant):
         self._data.qpos[self._hand_qpos] = hand_pose
         mujoco.mj_forward(m, self._data)
         self._settle(target)
-
-    force_model_error = 6.0
-    """N (:attr:`~ccopt.plant.base.Plant.force_model_error`): the hand's inertia makes the force
-    and the impedance differ while it accelerates, up to 6 N for 50 ms when a steeply tilted object
-    slipped on the ground (a hexagon at 55°), 1.6 N on quiet runs."""
 
     @property
     def hand_angle_range(self) -> tuple[float, float]:
