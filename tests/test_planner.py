@@ -267,6 +267,26 @@ def test_a_ground_goal_out_of_reach_says_which_slide_and_where(cases: dict[str, 
     assert not margin >= 1.0
 
 
+@pytest.mark.parametrize(("goal_deg", "status"), [(31.6, "unreachable"), (30.0, "reached")])
+def test_a_tilt_goal_past_the_reach_closes_at_its_end_or_is_unreachable(
+    cases: dict[str, Case], goal_deg: float, status: str
+) -> None:
+    """A reach ending at 29.7° (the Panda's at its start): 30° is within the aim (half the 1°
+    tolerance) of the reach's end and planned there; 31.6° is not, and no motion is planned past
+    the end (the plan's every point is checked against the reach and with a direct LP)."""
+    c = cases["triangle"]
+    panda = Case(c.truth, (c.reach[0], math.radians(29.69)), c.lever)
+    params = PlannerParams()
+    answer = oracle_plan(panda.truth.statics, start_of(panda), reach(theta_deg=goal_deg), 0.0, panda.reach,
+                         panda.lever, FORCES, params, face=panda.truth.s_h_range)
+    end = assert_plan_keeps_margin(panda, answer.motions, params)
+    assert answer.status == status, answer.reason
+    if status == "reached":
+        assert math.isclose(end[0], panda.reach[1], abs_tol=1e-9)
+    else:
+        assert answer.reason.startswith("θ_o 31.6°: 1.9° beyond the robot's reach"), answer.reason
+
+
 def test_a_reach_closed_down_to_the_current_tilt_plans_without_pivots(cases: dict[str, Case]) -> None:
     """Tilt limits met on both sides (a one-point reach): a tilt goal is unreachable, a ground goal
     is judged at the current tilt alone, and nothing raises."""
