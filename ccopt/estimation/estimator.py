@@ -451,11 +451,10 @@ class Estimator:
     def _ground_gave(self, hand: ContactMode | None, likely: ContactConfiguration, theta_h: float) -> bool:
         """Whether a ground the kinematics follow in a commanded hand slide is the contact that gave:
         the forces keep the hand inside its friction cone (``likely``; ``μ̂_h`` is at most the true
-        friction, so the hand stuck) and the tilt tells the two slides apart
-        (:meth:`_split_observable`). A hand at
-        its limit does not tell: on the paper rectangle the exploration's hand slide (+3 mm at
-        16.6°, the ground still) had the kinematics follow the ground, whose estimate wandered ±1 mm
-        a sample and drifted 3 mm with the hand's own slide."""
+        friction, so the hand stuck) and the tilt tells the two slides apart (:meth:`_split_observable`).
+        A hand at its limit does not tell: on the paper rectangle the exploration's hand slide (+3 mm
+        at 16.6°, the ground still) had the kinematics follow the ground, whose estimate wandered
+        ±1 mm a sample and drifted 3 mm with the hand's own slide."""
         if hand is None or hand == _STICK or likely.hand_mode != _STICK:
             return False
         return self._split_observable(theta_h)

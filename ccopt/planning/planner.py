@@ -386,11 +386,11 @@ def _blocked(
                 f"s_h {_length(goal.s_h)}: no hand slide {towards(sign, 's_h')} is possible at any tilt in "
                 f"{_degrees(grid.theta_range)}{_limits(statics_of, lever)}"
             )
-    if goal.theta_o is not None and past_reach(goal.theta_o, grid.theta_range) != 0.0:
-        beyond = math.degrees(past_reach(goal.theta_o, grid.theta_range))
+    beyond = 0.0 if goal.theta_o is None else past_reach(goal.theta_o, grid.theta_range)
+    if beyond:
         return (
-            f"θ_o {math.degrees(goal.theta_o):.1f}°: {abs(beyond):.1f}° beyond the robot's reach "
-            f"{_degrees(grid.theta_range)}"
+            f"θ_o {math.degrees(goal.theta_o):.1f}°: {abs(math.degrees(beyond)):.1f}° beyond the "
+            f"robot's reach {_degrees(grid.theta_range)}"
         )
     if goal.theta_o is not None:
         return (
