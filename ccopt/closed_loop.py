@@ -569,6 +569,16 @@ class _StepTracker:
         return (coordinates[k] - self.command.targets[k]) * math.copysign(1.0, step.delta) > step.tolerance
 
 
+def _within_turn_rate(params: ControllerParams, rate: float) -> ControllerParams:
+    """``params`` with the impedance target's angular speed capped at the plant's
+    :attr:`~ccopt.plant.base.Plant.hand_turn_rate` (rad/s): the whole step is scaled to it, so a
+    pivot keeps the direction that balances its wrench."""
+    normal, tangential, angular = params.max_speed
+    if angular <= rate:
+        return params
+    return dataclasses.replace(params, max_speed=(normal, tangential, rate))
+
+
 ROLL_TIME = 0.15
 """s: a goal's motion or an exploration step whose hand the estimate sees off flush this long ends
 ``rolled`` (a pivot: its torque at the hand's limit the other way on every sample; a flush pivot's
@@ -700,7 +710,8 @@ class _Loop:
         self.plant = make_plant(obj, params)
         self.sensors = Sensors(self.plant, params.sensor_params, seed)
         self.estimator = Estimator(params.hand, params.estimator_params)
-        self.controller = Controller(params.hand, params.control_period, params.controller_params)
+        controls = _within_turn_rate(params.controller_params, self.plant.hand_turn_rate)
+        self.controller = Controller(params.hand, params.control_period, controls)
         p = params.controller_params
         self.goal = TargetGoal(
             params.hand.force_limits, p.normal_force, p.statics_margin, p.friction_step, p.slide_beyond,

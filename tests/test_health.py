@@ -214,11 +214,12 @@ def test_on_the_panda_a_sound_sensor_runs_on_and_one_reading_a_tenth_stops_the_r
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(("tolerance", "status"), [(None, "completed"), (6.0, "sensor_fault")])
+@pytest.mark.parametrize(("tolerance", "status"), [(None, "completed"), (2.0, "sensor_fault")])
 def test_the_panda_triangles_paper_run_is_no_sensor_fault_at_the_panda_s_own_tolerance(tolerance, status):
-    """The run whose sound sensor strays furthest from the Panda's impedance (8.1 N held for 100 ms
-    while its hand rolls at −38°, 16.8 s in): at the planar plant's 6 N it was stopped as a sensor
-    fault; at the Panda's own figure it runs to its end."""
+    """A sound sensor's force strays from the Panda's impedance by up to 4.2 N held for 100 ms on the
+    triangle's ``paper`` run (26.2 s in; 8.1 N at −38° when the Panda's hand turned at 30°/s, and the
+    planar plant's 6 N then stopped the run as a sensor fault): at the Panda's own figure the run goes
+    to its end, below its model error the check stops it."""
     params = closed_loop.LoopParams(plant="panda", supervision=Supervision(health_tolerance=tolerance))
     result = closed_loop.run(make_object("paper-triangle"), load_schedule("paper"), params, seed=0)
     assert result.status == status, result.message

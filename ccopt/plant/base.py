@@ -147,6 +147,12 @@ class Plant(Protocol):
     """N: how far the hand force may differ from the impedance model ``K e + D ė`` (filtered, for as
     long as a sensor fault must last, :mod:`ccopt.health`) in fault-free runs of this plant: its
     inertia, and on an arm the coupling of its axes. The sensor-health check tolerates this much."""
+    hand_turn_rate: float
+    """rad/s: the fastest the impedance target may turn the hand (``math.inf``: as fast as the
+    controller's own limit). A turning hand lags its target and runs on past it when the target
+    stops; a pivot that lands the object on a face, unforeseeable from the estimate, is stopped
+    when the hand is seen rolling, and the hand rolls against the object by what it lagged and ran
+    on. The loop caps the controller's angular speed at this rate."""
 
     def set_target(self, pose: ArrayLike, velocity: ArrayLike | None = None) -> None:
         """Hand impedance target, world ``(x, y, θ)`` (m, rad), with optional velocity feed-forward."""
