@@ -14,7 +14,8 @@ On closed-loop runs of the paper schedule on the planar plant (three objects, de
 estimator at 100 Hz and 1 kHz) the filtered difference stayed below 1.6 N over any 50 ms and below
 5.4 N at any sample (pose noise through the damping term, sliding onsets, impacts), against forces
 up to 34 N. On the Panda plant (arm inertia, a damping that couples the axes, the F/T sensor at
-the flange) the model is rougher: up to 9.6 N over 50 ms on the paper schedule, so a run takes its
+the flange) the model is rougher: up to 9.6 N over 50 ms on the paper schedule (the hand turning at
+30°/s, before its :attr:`~ccopt.plant.base.Plant.hand_turn_rate` was capped), so a run takes its
 ``force_tolerance`` from the plant (:attr:`ccopt.plant.base.Plant.force_model_error`). The
 torque is not compared: its prediction carries ``k_θ σ_θ`` ≈ 0.1 N·m of angle noise (and 1.4 N·m
 of model error on the Panda) against torques below 1 N·m, and every fault kind shows in the forces.
