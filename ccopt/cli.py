@@ -44,6 +44,7 @@ from ccopt.cliutil import (
     scripts,
     seed_value,
     stop_signals,
+    stops_held,
 )
 from ccopt.plant.base import MIN_RATE
 from ccopt.schedule import BUILTIN
@@ -284,7 +285,8 @@ def run_settings(args: argparse.Namespace) -> tuple[dict[str, object], dict[tupl
 
 
 def _command_run(args: argparse.Namespace, prog: str) -> int:
-    from ccopt import experiment
+    with stops_held():  # an interrupted C extension's import fails with an ImportError
+        from ccopt import experiment
 
     try:
         settings, labels = run_settings(args)
@@ -388,7 +390,8 @@ def draw_figures(loaded: record.Record, folder: Path, prog: str) -> bool:
     """
     import gc
 
-    from ccopt import plots
+    with stops_held():  # an interrupted C extension's import fails with an ImportError
+        from ccopt import plots
 
     gc.freeze()
     before = _figure_files(folder)

@@ -61,7 +61,11 @@ def seed_value(value: str) -> int:
 
 
 _stopping = threading.Event()
-"""Set by the first stop signal: the program is on its way out."""
+"""Set by the first stop signal: the program is on its way out (:func:`stop_requested`)."""
+_held = threading.Event()
+"""Set by a stop signal that came within :func:`stops_held`: it is raised when the block ends."""
+_holding = [0]
+"""How deep the main thread is in :func:`stops_held` blocks."""
 
 
 @contextlib.contextmanager
@@ -88,7 +92,7 @@ def stop_signals(prog: str) -> Iterator[None]:
                     stream.flush()
             os._exit(INTERRUPTED)
         _stopping.set()
-        raise KeyboardInterrupt
+        _interrupt()
 
     previous = {number: signal.signal(number, handle) for number in STOP_SIGNALS}
     try:
@@ -97,6 +101,63 @@ def stop_signals(prog: str) -> Iterator[None]:
         if not _stopping.is_set():
             for number, handler in previous.items():
                 signal.signal(number, handler)
+
+
+def stop_requested() -> bool:
+    """Whether a stop signal has come under :func:`stop_signals` (or :func:`request_stop` was called):
+    the program is on its way out. Long work polls it, because the ``KeyboardInterrupt`` a handler
+    raises can be swallowed: a CasADi solver that checks for signals in its C++ code takes it for a
+    failed solve and returns (a Panda run stopped while the oracle's LPs ran exited 0, 2 times in 40).
+    """
+    return _stopping.is_set()
+
+
+def request_stop() -> None:
+    """Mark the program as on its way out (:func:`stop_requested`): for a stop signal handler of its
+    own (a study's pool worker)."""
+    _stopping.set()
+
+
+def _interrupt(*_: object) -> None:
+    """Raise ``KeyboardInterrupt``, or hold it until the :func:`stops_held` block ends (unless one is
+    held already: the user insists)."""
+    if _holding[0] and not _held.is_set():
+        _held.set()
+        return
+    raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def stops_held() -> Iterator[None]:
+    """Within: a stop signal does not interrupt the block; it is raised as ``KeyboardInterrupt`` when
+    the block ends (over an exception the block raised: the user asked to stop). For set-up that an
+    interrupt would not stop but corrupt: a C extension's module initialisation turns it into
+    ``ImportError: initialization failed``, CasADi's C++ into its own error (which a fallback may
+    take for a failed compile, so that the signal is lost), and an ``exec`` it interrupts (a
+    dataclass or a named tuple being made) can leave the interpreter to kill itself with SIGINT at
+    exit although the interrupt was handled (a Panda run stopped while it started did each, 4 times
+    in 40). Under :func:`stop_signals` it holds all three stop signals (a second one still ends the
+    program at once); otherwise Ctrl-C, as long as no other handler than Python's own is set (a
+    second Ctrl-C then interrupts at once).
+
+    Outside the main thread (where signals are not handled) it changes nothing. Blocks nest: the
+    outermost one raises.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    own = signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    previous = signal.signal(signal.SIGINT, _interrupt) if own else None
+    _holding[0] += 1
+    try:
+        yield
+    finally:
+        _holding[0] -= 1
+        if own:
+            signal.signal(signal.SIGINT, previous)
+        if not _holding[0] and _held.is_set():
+            _held.clear()
+            raise KeyboardInterrupt
 
 
 def writable_json_path(value: str) -> Path:

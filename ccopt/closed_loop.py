@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 
 from ccopt import clock, contact, geometry, modes, validation
+from ccopt.cliutil import stop_requested, stops_held
 from ccopt.contact import GROUND_ROWS, Row
 from ccopt.control.controller import Command, ControlInput, Controller, ControllerParams
 from ccopt.control.targets import UNJUDGED, StaticsTarget, TargetGoal, statics_target
@@ -696,8 +697,16 @@ def run(
     ``contact_lost``, a sensor fault (:mod:`ccopt.health`) ``sensor_fault``, the run's time limit
     ``timeout`` — each with the impedance target held where the hand is — and an exception inside the
     loop ``error`` with its one-line message. The record is closed with that status in every case.
+    Ctrl-C while the run is being set up waits until the set-up is done (:func:`ccopt.cliutil.stops_held`)
+    and then raises ``KeyboardInterrupt``, before the first sample: the record is left ``running``
+    with no sample (:func:`ccopt.record.discard_unstarted` removes it). A stop signal that a solver
+    swallowed is acted on all the same, at the next control tick
+    (:func:`ccopt.cliutil.stop_requested`).
     """
-    loop = _Loop(obj, schedule, params or LoopParams(), seed, out, meta, on_tick)
+    with stops_held():  # building the plant loads libraries that an interrupt would break
+        loop = _Loop(obj, schedule, params or LoopParams(), seed, out, meta, on_tick)
+    if stop_requested():  # before the set-up, in a solver that swallowed the interrupt
+        raise KeyboardInterrupt
     return loop.run()
 
 
@@ -773,6 +782,8 @@ class _Loop:
                 if self.status != "completed":
                     break
                 if tick % controller_every == 0:
+                    if stop_requested():  # a solver may have swallowed the signal's interrupt
+                        raise KeyboardInterrupt
                     self._control()
                 if self.now >= limit:
                     self._stop("timeout", f"the run's time limit of {limit:g} s (simulated) ran out")

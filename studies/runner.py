@@ -54,7 +54,15 @@ from typing import Any, TypeVar
 import numpy as np
 from tqdm import tqdm
 
-from ccopt.cliutil import STOP_SIGNALS, OneLineParser, fail, seed_value, write_json
+from ccopt.cliutil import (
+    STOP_SIGNALS,
+    OneLineParser,
+    fail,
+    request_stop,
+    seed_value,
+    stop_requested,
+    write_json,
+)
 from ccopt.closed_loop import LoopParams, RunResult
 from ccopt.config import UNITS
 from ccopt.experiment import TOUR_SCHEDULE, experimenter_tour
@@ -215,7 +223,7 @@ def error_line(error: BaseException) -> str:
 
 def _timed_trial(function: Trial, spec: Spec) -> tuple[dict, float]:
     """Run one trial where it is scheduled; an exception becomes an error row (never a crash)."""
-    if _STOPPING.is_set():  # a pool worker told to stop: no new trial
+    if stop_requested():  # a pool worker told to stop: no new trial
         raise KeyboardInterrupt
     start = time.perf_counter()
     _IN_TRIAL.set()
@@ -229,8 +237,7 @@ def _timed_trial(function: Trial, spec: Spec) -> tuple[dict, float]:
 
 
 _IN_TRIAL = threading.Event()
-_STOPPING = threading.Event()
-"""In a pool worker: whether a trial is running, and whether the study is stopping."""
+"""In a pool worker: whether a trial is running."""
 
 
 def _pool_worker_start() -> None:
@@ -242,9 +249,9 @@ def _pool_worker_start() -> None:
 
 
 def _stop_worker(signum: int, frame: object) -> None:
-    if _STOPPING.is_set():  # already stopping: let the trial close its record
+    if stop_requested():  # already stopping: let the trial close its record
         return
-    _STOPPING.set()
+    request_stop()  # the run's loop polls it too: a solver may swallow the interrupt
     if _IN_TRIAL.is_set():
         raise KeyboardInterrupt
 

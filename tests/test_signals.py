@@ -80,10 +80,16 @@ def test_a_second_signal_ends_at_once_and_quietly(tmp_path):
         assert_loads(out)
 
 
-def test_ctrl_c_while_starting_leaves_no_folder(tmp_path):
+@pytest.mark.parametrize("delay", [0.0, 0.15, 0.4])
+def test_ctrl_c_while_starting_leaves_no_folder(tmp_path, delay):
+    """At any moment of the Panda's set-up (about half a second after the folder is made: its model,
+    the arm's libraries, the compiled QP): stopped there, it once exited 0 as if never stopped, once
+    with ``ImportError: initialization failed``, and once killed by SIGINT after saying the right
+    thing (4 of 40 tries at random moments)."""
     out = tmp_path / "new" / "run"
     process = start(out, "--schedule", "smoke", "--plant", "panda")
     wait_for(out.is_dir, process)
+    time.sleep(delay)
     process.send_signal(signal.SIGINT)
     code, _, err = finish(process)
     assert code == 130 and err == ["ccopt run: interrupted before the run started; nothing was recorded"]
@@ -157,3 +163,87 @@ def test_a_second_signal_ends_the_program_even_if_its_exception_is_swallowed():
     done = subprocess.run([sys.executable, "-c", SWALLOWED], capture_output=True, text=True, timeout=60)
     assert done.returncode == 130 and "survived" not in done.stdout, (done.stdout, done.stderr)
     assert done.stderr.splitlines() == ["prog: SIGTERM again: stopping now"]
+
+
+HELD = """
+import os, signal, sys, time
+from ccopt.cliutil import stop_signals, stops_held
+
+def set_up(number):
+    with stops_held():
+        os.kill(os.getpid(), number)
+        time.sleep(0.2)
+        with stops_held():  # nested blocks: the outermost one raises
+            pass
+        print("set up", flush=True)
+        {last}
+    print("not reached")
+
+try:
+    if sys.argv[1] == "plain":
+        set_up(signal.SIGINT)
+    else:
+        with stop_signals("prog"):
+            set_up(signal.SIGTERM)
+except KeyboardInterrupt as error:
+    print("interrupted", type(error.__context__).__name__, flush=True)
+"""
+
+
+@pytest.mark.parametrize("where", ["plain", "stop_signals"])
+@pytest.mark.parametrize("last", ["pass", "raise RuntimeError('set-up failed')"])
+def test_a_stop_signal_in_a_held_block_is_raised_when_the_block_ends(where, last):
+    """Ctrl-C with Python's own handler, SIGTERM under :func:`stop_signals`: the block runs to its end,
+    then ``KeyboardInterrupt`` (over the block's own error, which it keeps as its context)."""
+    script = HELD.replace("{last}", last)
+    done = subprocess.run([sys.executable, "-c", script, where], capture_output=True, text=True, timeout=60)
+    context = "RuntimeError" if "raise" in last else "NoneType"
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines() == ["set up", f"interrupted {context}"]
+
+
+INSISTED = """
+import os, signal, time
+from ccopt.cliutil import stops_held
+
+try:
+    with stops_held():
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.2)
+        print("held", flush=True)
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.2)
+        print("not reached")
+except KeyboardInterrupt:
+    print("interrupted", flush=True)
+"""
+
+
+def test_a_second_ctrl_c_in_a_held_block_interrupts_at_once():
+    done = subprocess.run([sys.executable, "-c", INSISTED], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0 and done.stdout.splitlines() == ["held", "interrupted"], done.stderr
+
+
+SWALLOWED_IN_A_RUN = """
+from ccopt import closed_loop
+from ccopt.cliutil import request_stop
+from ccopt.objects import make_object
+from ccopt.schedule import Schedule, hold
+
+def on_tick(sim_time, index, total):
+    if sim_time > 0.3:
+        request_stop()  # what a stop signal's handler does before a solver swallows its interrupt
+
+result = closed_loop.run(make_object("paper-triangle"), Schedule("long", (hold(20.0),)), on_tick=on_tick)
+print(result.status, result.sim_time)
+"""
+
+
+def test_a_run_stops_on_a_stop_signal_whose_interrupt_was_swallowed():
+    """The loop polls :func:`ccopt.cliutil.stop_requested`: a Ctrl-C that a CasADi solver took for a
+    failed solve still ends the run, at the next control tick, ``interrupted``."""
+    script = [sys.executable, "-c", SWALLOWED_IN_A_RUN]
+    done = subprocess.run(script, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    status, sim_time = done.stdout.split()
+    assert status == "interrupted" and 0.3 < float(sim_time) < 0.5
