@@ -106,9 +106,10 @@ def stop_signals(prog: str) -> Iterator[None]:
 def stop_requested() -> bool:
     """Whether a stop signal has come under :func:`stop_signals` (or :func:`request_stop` was called):
     the program is on its way out. Long work polls it, because the ``KeyboardInterrupt`` a handler
-    raises can be swallowed: a CasADi solver that checks for signals in its C++ code takes it for a
-    failed solve and returns (a Panda run stopped while the oracle's LPs ran exited 0, 2 times in 40).
-    """
+    raises can be lost: CasADi, building a function (symbolic operations, ``casadi.Function``), runs
+    the handlers from its C++ code and at times drops what they raise (2 times in 20 interrupts of a
+    loop building functions; a Panda run stopped while its oracle built its LP exited 0, 2 times in
+    40)."""
     return _stopping.is_set()
 
 
@@ -132,13 +133,12 @@ def stops_held() -> Iterator[None]:
     """Within: a stop signal does not interrupt the block; it is raised as ``KeyboardInterrupt`` when
     the block ends (over an exception the block raised: the user asked to stop). For set-up that an
     interrupt would not stop but corrupt: a C extension's module initialisation turns it into
-    ``ImportError: initialization failed``, CasADi's C++ into its own error (which a fallback may
-    take for a failed compile, so that the signal is lost), and an ``exec`` it interrupts (a
-    dataclass or a named tuple being made) can leave the interpreter to kill itself with SIGINT at
-    exit although the interrupt was handled (a Panda run stopped while it started did each, 4 times
-    in 40). Under :func:`stop_signals` it holds all three stop signals (a second one still ends the
-    program at once); otherwise Ctrl-C, as long as no other handler than Python's own is set (a
-    second Ctrl-C then interrupts at once).
+    ``ImportError: initialization failed``, CasADi building a function may drop it
+    (:func:`stop_requested`), and once a Panda run stopped while it started was killed by SIGINT
+    after it had handled the interrupt (4 of 40 such runs went wrong before its set-up was held and
+    the loop polled, 0 of 80 after). Under :func:`stop_signals` it holds all three stop signals (a
+    second one still ends the program at once); otherwise Ctrl-C, as long as no other handler than
+    Python's own is set (a second Ctrl-C then interrupts at once).
 
     Outside the main thread (where signals are not handled) it changes nothing. Blocks nest: the
     outermost one raises.

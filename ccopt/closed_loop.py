@@ -699,13 +699,13 @@ def run(
     loop ``error`` with its one-line message. The record is closed with that status in every case.
     Ctrl-C while the run is being set up waits until the set-up is done (:func:`ccopt.cliutil.stops_held`)
     and then raises ``KeyboardInterrupt``, before the first sample: the record is left ``running``
-    with no sample (:func:`ccopt.record.discard_unstarted` removes it). A stop signal that a solver
-    swallowed is acted on all the same, at the next control tick
+    with no sample (:func:`ccopt.record.discard_unstarted` removes it). A stop signal whose interrupt
+    CasADi dropped is acted on all the same, at the next control tick
     (:func:`ccopt.cliutil.stop_requested`).
     """
     with stops_held():  # building the plant loads libraries that an interrupt would break
         loop = _Loop(obj, schedule, params or LoopParams(), seed, out, meta, on_tick)
-    if stop_requested():  # before the set-up, in a solver that swallowed the interrupt
+    if stop_requested():  # before the set-up, where CasADi dropped the interrupt
         raise KeyboardInterrupt
     return loop.run()
 
@@ -782,7 +782,7 @@ class _Loop:
                 if self.status != "completed":
                     break
                 if tick % controller_every == 0:
-                    if stop_requested():  # a solver may have swallowed the signal's interrupt
+                    if stop_requested():  # CasADi may have dropped the signal's interrupt
                         raise KeyboardInterrupt
                     self._control()
                 if self.now >= limit:

@@ -251,7 +251,7 @@ def _pool_worker_start() -> None:
 def _stop_worker(signum: int, frame: object) -> None:
     if stop_requested():  # already stopping: let the trial close its record
         return
-    request_stop()  # the run's loop polls it too: a solver may swallow the interrupt
+    request_stop()  # the run's loop polls it too: CasADi may drop the interrupt
     if _IN_TRIAL.is_set():
         raise KeyboardInterrupt
 

@@ -232,16 +232,17 @@ from ccopt.schedule import Schedule, hold
 
 def on_tick(sim_time, index, total):
     if sim_time > 0.3:
-        request_stop()  # what a stop signal's handler does before a solver swallows its interrupt
+        request_stop()  # what a stop signal's handler does before CasADi drops its interrupt
 
 result = closed_loop.run(make_object("paper-triangle"), Schedule("long", (hold(20.0),)), on_tick=on_tick)
 print(result.status, result.sim_time)
 """
 
 
-def test_a_run_stops_on_a_stop_signal_whose_interrupt_was_swallowed():
-    """The loop polls :func:`ccopt.cliutil.stop_requested`: a Ctrl-C that a CasADi solver took for a
-    failed solve still ends the run, at the next control tick, ``interrupted``."""
+def test_a_run_stops_on_a_stop_signal_whose_interrupt_was_dropped():
+    """The loop polls :func:`ccopt.cliutil.stop_requested`: a Ctrl-C whose interrupt CasADi dropped
+    (it runs the handlers from C++ while it builds a function) still ends the run, at the next control
+    tick, ``interrupted``."""
     script = [sys.executable, "-c", SWALLOWED_IN_A_RUN]
     done = subprocess.run(script, capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
