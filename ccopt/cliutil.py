@@ -92,7 +92,7 @@ def stop_signals(prog: str) -> Iterator[None]:
                     stream.flush()
             os._exit(INTERRUPTED)
         _stopping.set()
-        _interrupt()
+        interrupt()
 
     previous = {number: signal.signal(number, handle) for number in STOP_SIGNALS}
     try:
@@ -119,9 +119,10 @@ def request_stop() -> None:
     _stopping.set()
 
 
-def _interrupt(*_: object) -> None:
-    """Raise ``KeyboardInterrupt``, or hold it until the :func:`stops_held` block ends (unless one is
-    held already: the user insists)."""
+def interrupt(*_: object) -> None:
+    """What a stop signal's handler does once it has decided to stop: raise ``KeyboardInterrupt``,
+    or hold it until the :func:`stops_held` block ends (unless one is held already: the user
+    insists). Every handler goes through it, so that held set-up holds whatever stops it."""
     if _holding[0] and not _held.is_set():
         _held.set()
         return
@@ -147,7 +148,7 @@ def stops_held() -> Iterator[None]:
         yield
         return
     own = signal.getsignal(signal.SIGINT) is signal.default_int_handler
-    previous = signal.signal(signal.SIGINT, _interrupt) if own else None
+    previous = signal.signal(signal.SIGINT, interrupt) if own else None
     _holding[0] += 1
     try:
         yield

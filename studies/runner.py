@@ -58,6 +58,7 @@ from ccopt.cliutil import (
     STOP_SIGNALS,
     OneLineParser,
     fail,
+    interrupt,
     request_stop,
     seed_value,
     stop_requested,
@@ -253,7 +254,7 @@ def _stop_worker(signum: int, frame: object) -> None:
         return
     request_stop()  # the run's loop polls it too: CasADi may drop the interrupt
     if _IN_TRIAL.is_set():
-        raise KeyboardInterrupt
+        interrupt()  # held while the trial's run is being set up
 
 
 _THREAD_STATE = threading.local()

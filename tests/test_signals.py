@@ -37,6 +37,12 @@ def finish(process):
     return process.returncode, out, [line for line in err.splitlines() if not line.startswith("warning:")]
 
 
+def python(script, *args, timeout=60):
+    """Run ``script`` in a fresh Python process with ``args``; its completed process."""
+    command = [sys.executable, "-c", script, *args]
+    return subprocess.run(command, capture_output=True, text=True, timeout=timeout)
+
+
 def status(out):
     return json.loads((out / "meta.json").read_text())["status"]
 
@@ -160,7 +166,7 @@ def test_a_second_signal_ends_the_program_even_if_its_exception_is_swallowed():
     """The second signal's exit cannot be undone by code that catches what the handler raises (a C
     extension that runs the signal handlers itself and replaces their exception, as CasADi does:
     the suite once saw 'SIGTERM again: stopping now' followed by the first signal's ending)."""
-    done = subprocess.run([sys.executable, "-c", SWALLOWED], capture_output=True, text=True, timeout=60)
+    done = python(SWALLOWED)
     assert done.returncode == 130 and "survived" not in done.stdout, (done.stdout, done.stderr)
     assert done.stderr.splitlines() == ["prog: SIGTERM again: stopping now"]
 
@@ -196,7 +202,7 @@ def test_a_stop_signal_in_a_held_block_is_raised_when_the_block_ends(where, last
     """Ctrl-C with Python's own handler, SIGTERM under :func:`stop_signals`: the block runs to its end,
     then ``KeyboardInterrupt`` (over the block's own error, which it keeps as its context)."""
     script = HELD.replace("{last}", last)
-    done = subprocess.run([sys.executable, "-c", script, where], capture_output=True, text=True, timeout=60)
+    done = python(script, where)
     context = "RuntimeError" if "raise" in last else "NoneType"
     assert done.returncode == 0, done.stderr
     assert done.stdout.splitlines() == ["set up", f"interrupted {context}"]
@@ -220,7 +226,7 @@ except KeyboardInterrupt:
 
 
 def test_a_second_ctrl_c_in_a_held_block_interrupts_at_once():
-    done = subprocess.run([sys.executable, "-c", INSISTED], capture_output=True, text=True, timeout=60)
+    done = python(INSISTED)
     assert done.returncode == 0 and done.stdout.splitlines() == ["held", "interrupted"], done.stderr
 
 
@@ -243,8 +249,7 @@ def test_a_run_stops_on_a_stop_signal_whose_interrupt_was_dropped():
     """The loop polls :func:`ccopt.cliutil.stop_requested`: a Ctrl-C whose interrupt CasADi dropped
     (it runs the handlers from C++ while it builds a function) still ends the run, at the next control
     tick, ``interrupted``."""
-    script = [sys.executable, "-c", SWALLOWED_IN_A_RUN]
-    done = subprocess.run(script, capture_output=True, text=True, timeout=120)
+    done = python(SWALLOWED_IN_A_RUN, timeout=120)
     assert done.returncode == 0, done.stderr
     status, sim_time = done.stdout.split()
     assert status == "interrupted" and 0.3 < float(sim_time) < 0.5
