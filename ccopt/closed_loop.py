@@ -340,6 +340,9 @@ class _StepTracker:
         self.start_time = 0.0
         self._nominal: np.ndarray | None = None
         self._within_since: float | None = None
+        self._holding = False
+        """Whether a pivot's target holds still: its torque row was tight and is not yet clear of the
+        noise (:data:`ROLL_RELEASE`)."""
         self._since: dict[str, float] = {}  # when each lasting condition (rolled, lost, slipped) began
         self.roll_tilt: float | None = None
         """The estimated ``θ_o`` (rad) where the torque row that ends the pivot under way ``rolled``
@@ -399,6 +402,7 @@ class _StepTracker:
         self.start_time = now
         self._within_since = None
         self._since.clear()
+        self._holding = False
         self.roll_tilt = None
         self.fresh = True
         return current
@@ -479,8 +483,8 @@ class _StepTracker:
     @property
     def rolling(self) -> bool:
         """Whether the hand is seen off flush in a goal's motion or an exploration step, not yet for
-        :data:`ROLL_TIME`."""
-        return "rolled" in self._since
+        :data:`ROLL_TIME` (a pivot: until its torque row is clear of the noise, :data:`ROLL_RELEASE`)."""
+        return "rolled" in self._since or self._holding
 
     def _rolled(self, now: float, estimate: Estimate) -> bool:
         """Whether the hand has been seen off flush for :data:`ROLL_TIME` (the estimate's hand
@@ -499,17 +503,20 @@ class _StepTracker:
         with the true hand flush, which cut the planner's reach short of the tilt its ground slide
         needed); and counted on the held report a pivot that landed the object on a face ended
         0.3 s after it landed, the hand rolled 5–7° against the object (the paper square, rectangle
-        and pentagon pivoting down to a face). Once tight, the row counts as tight until its margin
-        exceeds ``pivot_margin`` by :data:`ROLL_RELEASE`. The estimated tilt where the stretch of
-        tight samples that ends the pivot began is :attr:`roll_tilt`."""
+        and pentagon pivoting down to a face). The target holds (:attr:`rolling`) from the first
+        tight sample until the row's margin exceeds ``pivot_margin`` by :data:`ROLL_RELEASE`. The
+        estimated tilt where the stretch of tight samples that ends the pivot began is
+        :attr:`roll_tilt`."""
         if self.step.kind == "pivot":
             margins, pos, neg = estimate.margins, Row.HAND_PIVOT_POS, Row.HAND_PIVOT_NEG
             known = bool(estimate.row_valid[pos])
             raw = tight_direction(margins[pos], margins[neg], self.pivot_margin, known)
             rolled = raw == -math.copysign(1.0, self.step.delta)
-            if not rolled and known and "rolled" in self._since:  # released only clear of the noise
+            if not rolled and known and ("rolled" in self._since or self._holding):
                 row = neg if self.step.delta > 0 else pos
-                rolled = margins[row] <= self.pivot_margin + ROLL_RELEASE
+                self._holding = margins[row] <= self.pivot_margin + ROLL_RELEASE
+            else:
+                self._holding = rolled
             if rolled and "rolled" not in self._since:
                 self.roll_tilt = estimate.theta_o if estimate.theta_o_valid else None
             return self._lasted("rolled", rolled, now, ROLL_TIME)
@@ -585,18 +592,22 @@ def _within_turn_rate(params: ControllerParams, rate: float) -> ControllerParams
 
 
 ROLL_RELEASE = 0.02
-"""N·m: a pivot's torque row that has become tight (within ``pivot_margin``) counts as tight until its
-margin exceeds ``pivot_margin`` by this much (:meth:`_StepTracker._rolled`). The margin ``l_h f_n ∓ τ``
-of the default sensors has a noise of about 0.01 N·m (0.005 N·m of torque, 0.3 N of force on a
-0.03 m lever), as much as ``pivot_margin`` itself: where the object lies on a face and the hand
-presses on, the margin hovers about zero (−0.08 to +0.01 N·m on the paper rectangle landing from
-2° after a hand slide) and single samples above ``pivot_margin`` released the held target, which
-stepped 0.3–0.5° at each release and rolled the hand 2.5° against the object; the pivot back then
-rolled it 2.2° more and was ``reached`` 1.35° short by the truth. Released two noise deviations
-clear, the landing rolled it 1.8° and nothing after it. Paper goals, 7 planar cases × 3 seeds:
-unintended slips 4 → 2, goals reached 193 either way, goals reached outside their tolerance 1 → 0
-(0.01 N·m gave the same figures; 0.04 N·m held too long: 187 reached). The Panda triangle and square
-(2 seeds each) ran the same."""
+"""N·m: a pivot's target, held from the first sample its torque row is tight (within ``pivot_margin``,
+:attr:`_StepTracker.rolling`), holds until the row's margin exceeds ``pivot_margin`` by this much.
+The margin ``l_h f_n ∓ τ`` of the default sensors has a noise of about 0.01 N·m (0.005 N·m of
+torque, 0.3 N of force on a 0.03 m lever), as much as ``pivot_margin`` itself: where the object
+lies on a face and the hand presses on, the margin hovers about zero (−0.08 to +0.01 N·m on the
+paper rectangle landing from 2° after a hand slide) and single samples above ``pivot_margin``
+released the target, which stepped 0.3–0.5° at each release and turned the hand 2.5° against the
+object; the pivot back turned it 2.2° more and was ``reached`` 1.35° short by the truth. Released
+two noise deviations clear, the landing turned it 1.8° and nothing after it. Only the hold: the
+pivot still ends ``rolled`` on a row tight on every sample for :data:`ROLL_TIME`. Counting the
+samples under this release as tight as well ended pivots that were still turning their object
+(random objects, the goals study: a −7.2° pivot ended ``rolled`` 1.1° short with the hand truly
+flush, and the tilt limit it set cut the planner's reach at 15°). Paper goals, 7 planar cases ×
+3 seeds: unintended slips 4 → 2, goals reached outside their tolerance 1 → 0, goals reached
+193 → 191; goals study (seeds 0, 1): oracle-reachable goals reached 118/124 and 94/107 either way.
+The Panda triangle and square (2 seeds each) run the same."""
 ROLL_TIME = 0.15
 """s: a goal's motion or an exploration step whose hand the estimate sees off flush this long ends
 ``rolled`` (a pivot: its torque at the hand's limit the other way on every sample; a flush pivot's
