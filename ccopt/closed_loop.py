@@ -512,11 +512,9 @@ class _StepTracker:
             known = bool(estimate.row_valid[pos])
             raw = tight_direction(margins[pos], margins[neg], self.pivot_margin, known)
             rolled = raw == -math.copysign(1.0, self.step.delta)
-            if not rolled and known and ("rolled" in self._since or self._holding):
-                row = neg if self.step.delta > 0 else pos
-                self._holding = margins[row] <= self.pivot_margin + ROLL_RELEASE
-            else:
-                self._holding = rolled
+            row = neg if self.step.delta > 0 else pos
+            clear = not known or margins[row] > self.pivot_margin + ROLL_RELEASE
+            self._holding = rolled or (self._holding and not clear)
             if rolled and "rolled" not in self._since:
                 self.roll_tilt = estimate.theta_o if estimate.theta_o_valid else None
             return self._lasted("rolled", rolled, now, ROLL_TIME)
@@ -600,7 +598,7 @@ lies on a face and the hand presses on, the margin hovers about zero (−0.08 to
 paper rectangle landing from 2° after a hand slide) and single samples above ``pivot_margin``
 released the target, which stepped 0.3–0.5° at each release and turned the hand 2.5° against the
 object; the pivot back turned it 2.2° more and was ``reached`` 1.35° short by the truth. Released
-two noise deviations clear, the landing turned it 1.8° and nothing after it. Only the hold: the
+two noise deviations clear, the landing turned it 1.8° and the pivot back 1.1°. Only the hold: the
 pivot still ends ``rolled`` on a row tight on every sample for :data:`ROLL_TIME`. Counting the
 samples under this release as tight as well ended pivots that were still turning their object
 (random objects, the goals study: a −7.2° pivot ended ``rolled`` 1.1° short with the hand truly
