@@ -35,7 +35,6 @@ import numpy as np
 
 from ccopt import __version__, config, objects, record
 from ccopt.cliutil import (
-    INTERRUPTED,
     OneLineParser,
     fail,
     fail_lines,
@@ -43,11 +42,10 @@ from ccopt.cliutil import (
     print_table,
     scripts,
     seed_value,
-    stop_signals,
-    stops_held,
 )
 from ccopt.plant.base import MIN_RATE
 from ccopt.schedule import BUILTIN
+from ccopt.stops import INTERRUPTED, stop_signals, stops_held
 
 if TYPE_CHECKING:
     from ccopt.plant.sensors import Fault

@@ -26,7 +26,6 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 
 from ccopt import clock, contact, geometry, modes, validation
-from ccopt.cliutil import stop_requested, stops_held
 from ccopt.contact import GROUND_ROWS, Row
 from ccopt.control.controller import Command, ControlInput, Controller, ControllerParams
 from ccopt.control.targets import UNJUDGED, StaticsTarget, TargetGoal, statics_target
@@ -43,6 +42,7 @@ from ccopt.plant.placement import hand_over_vertex
 from ccopt.plant.sensors import Measurement, SensorParams, Sensors
 from ccopt.record import RecordWriter
 from ccopt.schedule import Goal, Schedule, Step
+from ccopt.stops import stop_requested, stops_held
 
 if TYPE_CHECKING:
     from ccopt.plant.mujoco_panda import PandaParams
@@ -723,11 +723,11 @@ def run(
     ``contact_lost``, a sensor fault (:mod:`ccopt.health`) ``sensor_fault``, the run's time limit
     ``timeout`` — each with the impedance target held where the hand is — and an exception inside the
     loop ``error`` with its one-line message. The record is closed with that status in every case.
-    Ctrl-C while the run is being set up waits until the set-up is done (:func:`ccopt.cliutil.stops_held`)
+    Ctrl-C while the run is being set up waits until the set-up is done (:func:`ccopt.stops.stops_held`)
     and then raises ``KeyboardInterrupt``, before the first sample: the record is left ``running``
     with no sample (:func:`ccopt.record.discard_unstarted` removes it). A stop signal whose interrupt
     CasADi dropped is acted on all the same, at the next control tick
-    (:func:`ccopt.cliutil.stop_requested`).
+    (:func:`ccopt.stops.stop_requested`).
     """
     with stops_held():  # building the plant loads libraries that an interrupt would break
         loop = _Loop(obj, schedule, params or LoopParams(), seed, out, meta, on_tick)

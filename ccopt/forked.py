@@ -14,7 +14,7 @@ from collections.abc import Callable
 from multiprocessing.connection import Connection
 from pathlib import Path
 
-from ccopt.cliutil import STOP_SIGNALS
+from ccopt.stops import STOP_SIGNALS
 
 FORK = sys.platform.startswith("linux")
 """Whether :func:`side_by_side` forks a worker: on Linux. Elsewhere a fork is missing (Windows) or

@@ -12,7 +12,8 @@ import importlib
 import sys
 from collections.abc import Sequence
 
-from ccopt.cliutil import INTERRUPTED, OneLineParser, fail, print_scripts, scripts, stop_signals
+from ccopt.cliutil import OneLineParser, fail, print_scripts, scripts
+from ccopt.stops import INTERRUPTED, stop_signals
 
 PROG = "ccopt study"
 

@@ -54,21 +54,13 @@ from typing import Any, TypeVar
 import numpy as np
 from tqdm import tqdm
 
-from ccopt.cliutil import (
-    STOP_SIGNALS,
-    OneLineParser,
-    fail,
-    interrupt,
-    request_stop,
-    seed_value,
-    stop_requested,
-    write_json,
-)
+from ccopt.cliutil import OneLineParser, fail, seed_value, write_json
 from ccopt.closed_loop import LoopParams, RunResult
 from ccopt.config import UNITS
 from ccopt.experiment import TOUR_SCHEDULE, experimenter_tour
 from ccopt.objects import PlanarObject
 from ccopt.schedule import Schedule, load_schedule
+from ccopt.stops import STOP_SIGNALS, interrupt, request_stop, stop_requested
 
 Spec = Any
 """A trial spec: a dataclass instance or a dict, JSON-serialisable once through :func:`spec_dict`."""

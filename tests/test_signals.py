@@ -145,7 +145,7 @@ def test_sigterm_stops_a_pooled_study_and_the_runs_under_way(tmp_path):
 
 SWALLOWED = """
 import os, signal, sys, time
-from ccopt.cliutil import stop_signals
+from ccopt.stops import stop_signals
 
 with stop_signals("prog"):
     try:
@@ -173,7 +173,7 @@ def test_a_second_signal_ends_the_program_even_if_its_exception_is_swallowed():
 
 HELD = """
 import os, signal, sys, time
-from ccopt.cliutil import stop_signals, stops_held
+from ccopt.stops import stop_signals, stops_held
 
 def set_up(number):
     with stops_held():
@@ -210,7 +210,7 @@ def test_a_stop_signal_in_a_held_block_is_raised_when_the_block_ends(where, last
 
 INSISTED = """
 import os, signal, time
-from ccopt.cliutil import stops_held
+from ccopt.stops import stops_held
 
 try:
     with stops_held():
@@ -232,7 +232,7 @@ def test_a_second_ctrl_c_in_a_held_block_interrupts_at_once():
 
 SWALLOWED_IN_A_RUN = """
 from ccopt import closed_loop
-from ccopt.cliutil import request_stop
+from ccopt.stops import request_stop
 from ccopt.objects import make_object
 from ccopt.schedule import Schedule, hold
 
@@ -246,7 +246,7 @@ print(result.status, result.sim_time)
 
 
 def test_a_run_stops_on_a_stop_signal_whose_interrupt_was_dropped():
-    """The loop polls :func:`ccopt.cliutil.stop_requested`: a Ctrl-C whose interrupt CasADi dropped
+    """The loop polls :func:`ccopt.stops.stop_requested`: a Ctrl-C whose interrupt CasADi dropped
     (it runs the handlers from C++ while it builds a function) still ends the run, at the next control
     tick, ``interrupted``."""
     done = python(SWALLOWED_IN_A_RUN, timeout=120)
