@@ -330,25 +330,29 @@ def test_a_goal_explores_again_after_a_motion_lost_the_kinematics_and_fails_past
     assert sequencer.next(1.0, unknown, None, "lost").status == "failed"  # max_explorations = 2
 
 
-def test_a_tilt_beyond_the_reach_pivots_back_to_its_edge() -> None:
-    """From beyond either end of the reach by more than a pivot's tolerance, one pivot ends at that
-    end; within the tolerance (or the reach), nothing."""
+def test_a_tilt_beyond_the_reach_pivots_back_inside_its_edge() -> None:
+    """From beyond either end of the reach by more than a pivot's tolerance, one pivot aims a
+    tolerance inside that end, so that wherever within its tolerance it stops it lies within the
+    reach; within the tolerance (or the reach), nothing."""
     low, high = math.radians(-20.0), math.radians(30.0)
     tolerance = math.radians(0.7)
-    for theta, edge in ((low - math.radians(5.0), low), (high + math.radians(3.0), high)):
+    for theta, edge, inward in ((low - math.radians(5.0), low, 1.0), (high + math.radians(3.0), high, -1.0)):
         plan = back_within(theta, (low, high), PlannerParams())
         assert plan.status == "move" and plan.motion.kind == "pivot"
-        assert math.isclose(theta + plan.motion.delta, edge, abs_tol=1e-12)
+        assert math.isclose(theta + plan.motion.delta, edge + inward * tolerance, abs_tol=1e-12)
+        for stop in (-1.0, 1.0):
+            end = theta + plan.motion.delta + stop * plan.motion.tolerance
+            assert low - 1e-12 <= end <= high + 1e-12
     for theta in (low - 0.9 * tolerance, high + 0.9 * tolerance, 0.0):
         assert back_within(theta, (low, high), PlannerParams()) is None
 
 
-def test_a_rolled_pivot_limits_the_tilt_a_degree_short_of_where_the_roll_began() -> None:
-    """Where the roll was seen past the pivot's start, the limit is a degree short of it that way;
-    unknown, or not past the start, the start."""
+def test_a_rolled_pivot_limits_the_tilt_short_of_where_the_roll_began() -> None:
+    """Where the roll was seen past the pivot's start, the limit is a degree and a pivot's tolerance
+    (1.7°) short of it that way; unknown, or not past the start, the start."""
     deg = math.radians
-    assert math.isclose(tilt_limit(deg(-18.3), deg(-24.0), -1), deg(-23.0))
-    assert math.isclose(tilt_limit(deg(18.3), deg(24.0), 1), deg(23.0))
+    assert math.isclose(tilt_limit(deg(-18.3), deg(-24.0), -1), deg(-22.3))
+    assert math.isclose(tilt_limit(deg(18.3), deg(24.0), 1), deg(22.3))
     for roll in (None, math.nan, deg(-17.0), deg(-18.8)):
         assert tilt_limit(deg(-18.3), roll, -1) == deg(-18.3)
 

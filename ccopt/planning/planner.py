@@ -187,15 +187,22 @@ def _graph(
 
 
 def back_within(theta: float, reach: tuple[float, float], params: PlannerParams) -> Plan | None:
-    """A pivot back to the edge of ``reach`` from a tilt ``theta`` (rad) beyond it by more than a
-    pivot's tolerance; None within. A pivot that found the object's tipping point leaves it lying on
-    a face past the reach: no statics of the vertex hold there (a ground slide tried on a random
-    triangle lying on its face at −24.4° rolled the hand, and its failure then barred slides at
-    every tilt the vertex allowed)."""
+    """A pivot back inside ``reach`` from a tilt ``theta`` (rad) beyond it by more than a pivot's
+    tolerance; None within. A pivot that found the object's tipping point leaves it lying on a face
+    past the reach: no statics of the vertex hold there (a ground slide tried on a random triangle
+    lying on its face at −24.4° rolled the hand, and its failure then barred slides at every tilt
+    the vertex allowed).
+
+    The pivot aims a tolerance inside the edge, so that it ends within the reach wherever within
+    its tolerance it stops. Aimed at the edge itself it stopped short of it, past the reach: the
+    paper pentagon (seeds 0 and 1) was left 0.3–0.4° short of its tipping point by the truth, with
+    its far vertex on the ground, and its ground slide there did not start
+    (:mod:`tests.test_tipping_point`)."""
     beyond = past_reach(theta, reach)
-    if abs(beyond) <= DEFAULT_TOLERANCE["pivot"]:
+    tolerance = DEFAULT_TOLERANCE["pivot"]
+    if abs(beyond) <= tolerance:
         return None
-    return Plan("move", _step("pivot", -beyond, params))
+    return Plan("move", _step("pivot", -beyond - math.copysign(tolerance, beyond), params))
 
 
 def past_reach(theta: float, reach: tuple[float, float]) -> float:

@@ -67,7 +67,7 @@ from ccopt.planning.planner import (
     past_reach,
     towards,
 )
-from ccopt.schedule import Goal, Step, exploration
+from ccopt.schedule import DEFAULT_TOLERANCE, Goal, Step, exploration
 from ccopt.statics import ObjectStatics
 
 GOAL_STATUSES = ("reached", "unreachable", "timeout", "failed")
@@ -311,10 +311,14 @@ class GoalSequencer:
         return GoalResult(self.index, self.goal, self.start_time, now, status, reason, self.motions)
 
 
-ROLL_BACKOFF = math.radians(1.0)
+ROLL_BACKOFF = math.radians(1.0) + DEFAULT_TOLERANCE["pivot"]
 """rad: a pivot that rolled the hand limits the tilt that way this far short of where the roll was
-first seen (the estimate's tilt error is a few tenths of a degree; the report begins as the object
-lands)."""
+first seen: a degree, and a pivot's tolerance, so that a pivot that ends within its tolerance of the
+limit stays a degree short. The roll is seen once the object has landed and the hand presses it
+into its face, which the ground's compliance lets turn on: on the paper pentagon the roll was
+first seen 0.4–0.9° past its tipping point by the truth. With a degree alone, its ground slides
+were tried 0.3–0.4° short of the tipping point, with the far vertex on the ground, and did not
+start."""
 
 
 def tilt_limit(begin: float, roll_tilt: float | None, way: int) -> float:
