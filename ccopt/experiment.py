@@ -29,7 +29,7 @@ from ccopt.closed_loop import LoopParams, RunResult
 from ccopt.feasibility_map import FeasibilityMap
 from ccopt.objects import PlanarObject
 from ccopt.planning.planner import PlannerParams, oracle_plan
-from ccopt.planning.sequencer import GoalResult
+from ccopt.planning.sequencer import TIPPING_CLEARANCE, GoalResult
 from ccopt.planning.tour import Tour, plan_tour, vertex_range
 from ccopt.plant.base import StartConfig
 from ccopt.record import load_record, write_summary
@@ -135,24 +135,23 @@ class OracleFrame:
     lever: float
 
 
-TIPPING_BACKOFF = float(np.radians(1.0))
-"""rad: the oracle keeps the object this far short of each true tipping point."""
-
-
 def oracle_frame(obj: PlanarObject, params: LoopParams, hand_angle_range: tuple[float, float]) -> OracleFrame:
     """The oracle's frame of a run of ``obj`` with ``params`` on a robot reaching ``hand_angle_range``.
 
-    Its reach keeps the object on its start vertex :data:`TIPPING_BACKOFF` short of each tipping
-    point: the planner goes to the ends of its reach (partial pivots,
-    :attr:`~ccopt.planning.graph.GraphParams.end_pivot`), and a pivot ends within its tolerance
-    (0.7°) of its target, so a plan to the tipping point itself is not one a run could follow. The
-    estimate, which finds a tipping point only as a pivot rolls past it, keeps further back
-    (:data:`~ccopt.planning.sequencer.ROLL_BACKOFF`); the oracle's reach is not narrowed with it."""
+    Its reach keeps the object on its start vertex a degree short of each tipping point
+    (:data:`~ccopt.planning.sequencer.TIPPING_CLEARANCE`): the planner goes to the ends of its reach
+    (partial pivots, :attr:`~ccopt.planning.graph.GraphParams.end_pivot`), and a pivot ends within its
+    tolerance (0.7°) of its target, so a plan to the tipping point itself is not one a run could
+    follow. The estimate, which finds a tipping point only as a pivot rolls past it, keeps further
+    back (:data:`~ccopt.planning.sequencer.ROLL_BACKOFF`); the oracle's reach is not narrowed with
+    it."""
     start = closed_loop.start_config(obj, params)
     truth = statics.true_statics(obj, start, params.hand)
     low, high = vertex_range(obj, start)  # the object stays on its start vertex
-    backoff = TIPPING_BACKOFF
-    reach = (max(hand_angle_range[0], low + backoff), min(hand_angle_range[1], high - backoff))
+    reach = (
+        max(hand_angle_range[0], low + TIPPING_CLEARANCE),
+        min(hand_angle_range[1], high - TIPPING_CLEARANCE),
+    )
     f_min, f_max = params.hand.force_limits
     forces = (f_min, f_max - params.controller_params.force_headroom)
     lever = params.estimator_params.friction.torque_margin * params.hand.half_length

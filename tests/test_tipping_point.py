@@ -24,9 +24,10 @@ import numpy as np
 import pytest
 
 from ccopt.closed_loop import LoopParams, start_config
-from ccopt.experiment import TIPPING_BACKOFF, Experiment, run_experiment
+from ccopt.experiment import Experiment, run_experiment
 from ccopt.metrics import SLIP_ANGLE
 from ccopt.objects import from_vertices, make_object
+from ccopt.planning.sequencer import TIPPING_CLEARANCE
 from ccopt.planning.tour import vertex_range
 from ccopt.schedule import Schedule, exploration, load_schedule, reach
 
@@ -121,9 +122,9 @@ def pentagon(request):
 
 
 def test_a_slide_found_near_the_tipping_point_starts_a_degree_short_of_it(pentagon) -> None:
-    """By the truth, every goal's ground slide begins at least the oracle's
-    :data:`~ccopt.experiment.TIPPING_BACKOFF` short of either tipping point, and the goal back to
-    ``s_g`` 0, which the oracle reaches, is reached within its tolerance, without an unintended slip.
+    """By the truth, every goal's ground slide begins at least the oracle's clearance
+    (:data:`~ccopt.planning.sequencer.TIPPING_CLEARANCE`) short of either tipping point, and the goal
+    back to ``s_g`` 0, which the oracle reaches, is reached within its tolerance, without an unintended slip.
     Before, the pivot back from the roll stopped within its tolerance past the limit a degree short
     of where the roll was seen, 0.3–0.4° short of the tipping point: the far vertex touched the
     ground, the slide did not start, and the goal was reported unreachable."""
@@ -135,7 +136,7 @@ def test_a_slide_found_near_the_tipping_point_starts_a_degree_short_of_it(pentag
     assert any(s.delta < 0.0 for s in slides)
     for step in slides:
         tilt = theta[int(np.searchsorted(time, step.start_time))]
-        assert min(tilt - low, high - tilt) >= TIPPING_BACKOFF, (step, math.degrees(tilt - low))
+        assert min(tilt - low, high - tilt) >= TIPPING_CLEARANCE, (step, math.degrees(tilt - low))
     back = experiment.summary["goals"][-1]
     assert back["oracle"]["reachable"]
     assert back["status"] == "reached", back["reason"]

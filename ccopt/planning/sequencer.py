@@ -311,14 +311,17 @@ class GoalSequencer:
         return GoalResult(self.index, self.goal, self.start_time, now, status, reason, self.motions)
 
 
-ROLL_BACKOFF = math.radians(1.0) + DEFAULT_TOLERANCE["pivot"]
+TIPPING_CLEARANCE = math.radians(1.0)
+"""rad: how far short of a tipping point a plan keeps the object (the experimenter's oracle, of the
+true one: :func:`ccopt.experiment.oracle_frame`)."""
+ROLL_BACKOFF = TIPPING_CLEARANCE + float(DEFAULT_TOLERANCE["pivot"])
 """rad: a pivot that rolled the hand limits the tilt that way this far short of where the roll was
-first seen: a degree, and a pivot's tolerance, so that a pivot that ends within its tolerance of the
-limit stays a degree short. The roll is seen once the object has landed and the hand presses it
-into its face, which the ground's compliance lets turn on: on the paper pentagon the roll was
-first seen 0.4–0.9° past its tipping point by the truth. With a degree alone, its ground slides
-were tried 0.3–0.4° short of the tipping point, with the far vertex on the ground, and did not
-start."""
+first seen: :data:`TIPPING_CLEARANCE` and a pivot's tolerance, so that a pivot that ends within its
+tolerance of the limit stays that clearance short. The roll is seen once the object has landed and
+the hand presses it into its face, which the ground's compliance lets turn on: on the paper
+pentagon the roll was first seen 0.4–0.9° past its tipping point by the truth. With a degree alone,
+its ground slides were tried 0.3–0.4° short of the tipping point, with the far vertex on the
+ground, and did not start."""
 
 
 def tilt_limit(begin: float, roll_tilt: float | None, way: int) -> float:
