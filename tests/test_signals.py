@@ -88,18 +88,25 @@ def test_a_second_signal_ends_at_once_and_quietly(tmp_path):
 
 @pytest.mark.parametrize("delay", [0.0, 0.15, 0.4])
 def test_ctrl_c_while_starting_leaves_no_folder(tmp_path, delay):
-    """At any moment of the Panda's set-up (about half a second after the folder is made: its model,
-    the arm's libraries, the compiled QP): stopped there, it once exited 0 as if never stopped, once
-    with ``ImportError: initialization failed``, and once killed by SIGINT after saying the right
-    thing (4 of 40 tries at random moments)."""
+    """At any moment of the Panda's set-up (0.3–0.5 s after the folder is made, with the machine's
+    load: its model, the arm's libraries, the compiled QP): stopped there, it once exited 0 as if never
+    stopped, once with ``ImportError: initialization failed``, and once killed by SIGINT after saying
+    the right thing (4 of 40 tries at random moments). Where the set-up was done before the signal
+    came (the last delay, on a quiet machine), the run was stopped in its loop and says so, its
+    record kept."""
     out = tmp_path / "new" / "run"
     process = start(out, "--schedule", "smoke", "--plant", "panda")
     wait_for(out.is_dir, process)
     time.sleep(delay)
     process.send_signal(signal.SIGINT)
     code, _, err = finish(process)
-    assert code == 130 and err == ["ccopt run: interrupted before the run started; nothing was recorded"]
-    assert not (tmp_path / "new").exists()
+    assert code == 130 and len(err) == 1, err
+    if err[0] == "ccopt run: interrupted before the run started; nothing was recorded":
+        assert not (tmp_path / "new").exists()
+    else:
+        assert delay > 0.3 and err[0].startswith("ccopt run: interrupted; the record so far is in"), err
+        assert status(out) == "interrupted"
+        assert_loads(out)
 
 
 def test_ctrl_c_while_drawing_leaves_no_figure_cut_short(tmp_path):
