@@ -41,7 +41,7 @@ from ccopt.plant.base import MIN_RATE, Plant, PlantParams, StartConfig
 from ccopt.plant.placement import hand_over_vertex
 from ccopt.plant.sensors import Measurement, SensorParams, Sensors
 from ccopt.record import RecordWriter
-from ccopt.schedule import Goal, Schedule, Step
+from ccopt.schedule import Goal, Schedule, Step, probe_as_run
 from ccopt.stops import stop_requested, stops_held
 
 if TYPE_CHECKING:
@@ -127,11 +127,14 @@ class LoopParams:
         return max(1, round(self.estimator_hz / self.record_hz))
 
 
-STEP_STATUSES = ("reached", "timeout", "infeasible", "rolled", "slipped", "lost")
+STEP_STATUSES = ("reached", "timeout", "infeasible", "rolled", "slipped", "lost", "skipped")
 """How a step can end: its coordinate settled within tolerance (by the estimate), its time ran out,
 the estimated statics ruled it out, (a goal's motion or an exploration step) the hand rolled on
-the face's end instead (:data:`ROLL_TIME`), (a slide) the other contact slid instead, or (a
-goal's motion) the kinematics became unknown (:data:`LOST_TIME`)."""
+the face's end instead (:data:`ROLL_TIME`), (a slide) the other contact slid instead, (a goal's
+motion) the kinematics became unknown (:data:`LOST_TIME`), or (an exploration's second hand-slide
+probe) it was not run: :data:`SKIPPED_PROBE`."""
+SKIPPED_PROBE = "the hand slid in the first probe: μ_h is measured, the same both ways"
+"""The reason of a ``skipped`` probe (:func:`ccopt.schedule.probe_as_run`)."""
 
 
 @dataclass(frozen=True)
@@ -378,7 +381,7 @@ class _StepTracker:
             ended = (self.start_time, now, status, reason, step.explore, goal)
             self.results.append(StepResult(self.index, step.kind, step.delta, *ended))
             last = status
-        step = self._next(now, estimate, last)
+        step = self._next(now, estimate, last, float(hand_pose[2]))
         if step is None:
             return None
         self.active = step
@@ -420,9 +423,11 @@ class _StepTracker:
             return
         self.s_g_origin, self._origin_anchor = latest, estimate.ground_anchor
 
-    def _next(self, now: float, estimate: Estimate, last: str | None) -> Step | None:
+    def _next(self, now: float, estimate: Estimate, last: str | None, hand_angle: float) -> Step | None:
         """The next motion: the goal under way's, else the schedule's next step (a goal's first
-        motion); None at the end of the schedule."""
+        motion; an exploration's probe as :func:`~ccopt.schedule.probe_as_run` has it at the
+        ``hand_angle`` (rad), recorded ``skipped`` where it does not run); None at the end of the
+        schedule."""
         if self.goal is not None:
             answer = self.goal.next(now, estimate, self.s_g_origin, last, self.roll_tilt)
             if isinstance(answer, Step):
@@ -436,7 +441,12 @@ class _StepTracker:
                 return None
             item = self.steps[self.index]
             if isinstance(item, Step):
-                return item
+                run = probe_as_run(item, self.active, hand_angle, estimate.hand_slid)
+                if run is not None:
+                    return run
+                ended = (now, now, "skipped", SKIPPED_PROBE, True, None)
+                self.results.append(StepResult(self.index, item.kind, item.delta, *ended))
+                continue
             if self.sequencer is None:
                 raise ValueError(f"step {self.index + 1} is a goal but the loop has no planner")
             self.goal = self.sequencer(self.index, item, now)

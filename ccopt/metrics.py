@@ -235,9 +235,13 @@ def summarize(
 def probes(steps: Sequence[Mapping[str, object]]) -> dict[str, int]:
     """The exploration steps that move something (``Step.explore``: the exploration's probes, and a
     goal's motions that look for a limit, :mod:`ccopt.planning.sequencer`), which the ratios leave
-    out: ``n`` of them and how many were ``reached``."""
+    out: ``n`` of them that ran (not ``skipped``) and how many were ``reached``."""
     moving = [
-        step for step in steps if step.get("explore") and modes.driven_coordinate(step["kind"]) is not None
+        step
+        for step in steps
+        if step.get("explore")
+        and step.get("status") != "skipped"
+        and modes.driven_coordinate(step["kind"]) is not None
     ]
     return {"n": len(moving), "reached": sum(bool(step["reached"]) for step in moving)}
 

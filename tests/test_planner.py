@@ -370,12 +370,39 @@ def test_an_exploration_pivot_past_a_tilt_limit_turns_the_other_way() -> None:
     steps += [sequencer.next(1.0, at, None, "reached") for _ in exploration()[1:]]
     for step, planned in zip(steps, exploration(), strict=True):
         if planned.kind != "pivot":
-            assert step == planned
+            assert step.kind == planned.kind and abs(step.delta) == abs(planned.delta)
             continue
         beyond = -19.0 + math.degrees(planned.delta) < -20.0 - math.degrees(planned.tolerance)
         assert step.delta == (-planned.delta if beyond else planned.delta)
     assert any(step.delta != planned.delta for step, planned in zip(steps, exploration(), strict=True))
 
+
+
+@pytest.mark.parametrize("tilt", [-17.0, 17.0])
+def test_the_exploration_probes_the_safer_way_first_and_the_other_only_while_the_hand_has_not_slid(
+    tilt: float,
+) -> None:
+    unknown = Estimator().update(0.0, [0.0, 0.1, 0.0], [5.0, 0.0, 0.0])
+    at = dataclasses.replace(unknown, theta_o=math.radians(tilt))
+    aim = TargetGoal(force_limits=(2.0, 25.0), nominal_force=8.0, margin=1.0)
+    probe = next(step for step in exploration() if step.kind == "slide_hand")
+    pivots = sum(step.kind == "pivot" for step in exploration())
+
+    def probes(slid_after_first: bool) -> list[Step]:
+        sequencer = GoalSequencer(0, reach(10.0), 0.0, HAND_ANGLE_RANGE, aim)
+        answer, taken = sequencer.next(0.0, at, None), []
+        for _ in range(pivots):
+            answer = sequencer.next(1.0, at, None, "reached")
+        while isinstance(answer, Step):
+            taken.append(answer)
+            estimate = dataclasses.replace(at, hand_slid=slid_after_first)
+            answer = sequencer.next(1.0, estimate, None, "reached")
+        assert answer.status == "failed"  # the kinematics stay unknown here
+        return taken
+
+    first_way = 1 if tilt > 0.0 else -1
+    assert [step.delta for step in probes(False)] == [first_way * probe.delta, -first_way * probe.delta]
+    assert [step.delta for step in probes(True)] == [first_way * probe.delta]
 
 def plan_nominally(
     statics_of, c: Case, goal: Goal, params: PlannerParams, max_motions: int = 40, barred=None

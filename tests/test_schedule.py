@@ -1,12 +1,15 @@
 """Schedules: built-ins, files in degrees/millimetres, and clear errors."""
 
+import dataclasses
 import json
+import math
 
 import numpy as np
 import pytest
 
-from ccopt import schedule
+from ccopt import geometry, schedule
 from ccopt.modes import Motion
+from ccopt.schedule import exploration, probe_as_run, safer_probe_way
 
 
 def test_paper_schedule_explores_then_reaches_goals_both_ways_in_the_papers_increments():
@@ -163,3 +166,32 @@ def test_bad_goal_steps_name_the_step_and_value(tmp_path, entry, message):
     with pytest.raises(ValueError, match=message) as error:
         schedule.load_schedule(path)
     assert "step 1" in str(error.value) or "steps[0]" in str(error.value) or "#1" in str(error.value)
+
+
+def edge_lean(theta: float, way: int, mu_h: float) -> float:
+    """rad from the vertical of the hand's push at its friction limit in a slide ``way`` in ``s_h``
+    (the row that blocks it, :data:`ccopt.contact.hand_rows`, at zero: ``f_t = −way μ_h f_n``)."""
+    force = geometry.hand_normal(theta) - way * mu_h * geometry.hand_tangent(theta)
+    return math.atan2(abs(force[0]), -force[1])
+
+
+@pytest.mark.parametrize("mu_h", [0.1, 0.5, 1.0])
+def test_the_first_hand_slide_probe_leans_least_from_the_vertical(mu_h: float) -> None:
+    for theta in np.radians(np.linspace(-40.0, 40.0, 33)):
+        way = safer_probe_way(float(theta))
+        assert edge_lean(theta, way, mu_h) <= edge_lean(theta, -way, mu_h) + 1e-12
+
+
+
+def test_a_probe_runs_the_safer_way_first_then_the_other_only_while_the_hand_has_not_slid() -> None:
+    pivot, plus, minus = exploration()[-3:]
+    tilt = math.radians(-17.0)
+    first = probe_as_run(plus, pivot, tilt, False)
+    assert first.delta == minus.delta and first.kind == "slide_hand" and first.explore
+    assert probe_as_run(minus, pivot, tilt, True).delta == minus.delta  # the first runs whatever slid
+    assert probe_as_run(minus, first, tilt, False).delta == plus.delta  # the other way
+    assert probe_as_run(minus, first, tilt, True) is None  # μ_h measured: skipped
+    assert probe_as_run(plus, pivot, math.nan, False) == plus  # the tilt unknown: as given
+    scripted = dataclasses.replace(minus, explore=False)
+    assert probe_as_run(scripted, first, tilt, True) == scripted  # not a probe: as given
+    assert probe_as_run(pivot, first, tilt, True) == pivot

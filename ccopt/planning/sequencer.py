@@ -67,7 +67,7 @@ from ccopt.planning.planner import (
     past_reach,
     towards,
 )
-from ccopt.schedule import DEFAULT_TOLERANCE, Goal, Step, exploration
+from ccopt.schedule import DEFAULT_TOLERANCE, Goal, Step, exploration, probe_as_run
 from ccopt.statics import ObjectStatics
 
 GOAL_STATUSES = ("reached", "unreachable", "timeout", "failed")
@@ -163,6 +163,7 @@ class GoalSequencer:
         """Per way (``±1``), the tilts (rad) of the hand slides the hand held against (ended
         ``rolled`` or ``timeout``): see :meth:`_barred`."""
         self._exploration: list[Step] | None = None
+        self._explored_last: Step | None = None  # the exploration's last step (run or skipped)
         self.explorations = 0
         self._last: tuple[Step, float] | None = None  # the last motion and the tilt it began at
 
@@ -199,8 +200,10 @@ class GoalSequencer:
             elif self._exploration is None:
                 self._exploration = list(exploration())
                 self.explorations += 1
-        if self._exploration:
-            return self._take(self._within_limits(self._exploration.pop(0), float(estimate.theta_o)))
+        while self._exploration:
+            step = self._explored(self._exploration.pop(0), estimate)
+            if step is not None:
+                return self._take(step)
         if not usable:
             return self.end(now, "failed", "the kinematics are unknown after exploring")
         plan = self._plan(estimate, s_g_origin)
@@ -301,6 +304,14 @@ class GoalSequencer:
         if abs(past_reach(theta + step.delta, self._reach())) <= step.tolerance:
             return step
         return dataclasses.replace(step, delta=-step.delta)
+
+    def _explored(self, step: Step, estimate: Estimate) -> Step | None:
+        """An exploration's step as it runs: a pivot within the reach (:meth:`_within_limits`), a
+        probe as :func:`~ccopt.schedule.probe_as_run` has it at ``θ̂_o`` (None: skipped)."""
+        theta = float(estimate.theta_o)
+        run = probe_as_run(self._within_limits(step, theta), self._explored_last, theta, estimate.hand_slid)
+        self._explored_last = step if run is None else run
+        return run
 
     def _take(self, step: Step) -> Step:
         self.motions += 1
