@@ -328,6 +328,8 @@ class _StepTracker:
         self.index = -1
         self.active: Step | None = None
         """The motion under way: a schedule step or a goal's planned motion."""
+        self._scripted: Step | None = None
+        """The schedule's last motion step as it ran (or was skipped): what an exploration's probe follows."""
         self.goal: GoalSequencer | None = None
         self.goal_results: list[GoalResult] = []
         self.s_g_origin: float | None = None
@@ -441,7 +443,8 @@ class _StepTracker:
                 return None
             item = self.steps[self.index]
             if isinstance(item, Step):
-                run = probe_as_run(item, self.active, hand_angle, estimate.hand_slid)
+                run = probe_as_run(item, self._scripted, hand_angle, estimate.hand_slid)
+                self._scripted = item if run is None else run
                 if run is not None:
                     return run
                 ended = (now, now, "skipped", SKIPPED_PROBE, True, None)

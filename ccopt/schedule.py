@@ -245,7 +245,6 @@ def exploration(
     return pivots + probes
 
 
-
 def safer_probe_way(tilt: float) -> int:
     """The way (``±1`` in ``s_h``) to probe the hand's friction first at the hand angle ``tilt``
     (rad): the one whose friction edge lies nearer the vertical, so that the ground, whose friction
@@ -277,6 +276,7 @@ def probe_as_run(step: Step, previous: Step | None, tilt: float, hand_slid: bool
     else:
         return step
     return dataclasses.replace(step, delta=way * abs(step.delta))
+
 
 @dataclass(frozen=True)
 class Schedule:
