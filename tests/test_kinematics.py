@@ -421,6 +421,27 @@ def test_a_hand_that_slides_in_a_commanded_ground_slide_is_told_by_the_face_tilt
     assert abs(estimate.s_h - (S_H + slide)) < 1e-3
 
 
+@pytest.mark.parametrize("theta_deg", [-17.6, 17.6])
+def test_a_hand_that_slides_while_the_ground_report_flickers_is_still_caught(theta_deg):
+    """As above, but the classifier's ground report flickers (as it did on a goals-study triangle at
+    17.6°, low normal force): every fourth sample the kinematics are told the ground sticks, though it
+    still may slide. The following's start is kept through the flicker, so ``ŷ_o``'s drift adds up
+    and the hand slide is caught; by truth ``ŝ_g`` stays within a millimetre (restarting the start
+    at each flicker, the 10 mm hand slide was read as 5.8 mm of ground slide)."""
+    estimator, rng = KinematicEstimator(L_H), np.random.default_rng(17)
+    pivot_about_ground(estimator, rng)
+    theta, slide = math.radians(theta_deg), 0.01
+    params = KinematicsParams()
+    caught = max(params.hand_slide_height / abs(math.sin(theta)), params.hand_slide_travel)
+    for k, s_h in enumerate(np.linspace(S_H, S_H + slide, 400)):
+        pose = measured(geometry.hand_pose_from_contact(theta, s_h, D, R_O), rng)
+        modes = STICK if k % 4 == 3 else GROUND_SLIDES
+        estimate = step(estimator, pose, modes, ground_may_slide=True)
+        if s_h - S_H > caught + 2e-3:
+            assert abs(estimate.s_g - R_O[0]) < 1e-3
+    assert estimate.contact_valid and abs(estimate.s_h - (S_H + slide)) < 1e-3
+
+
 @pytest.mark.parametrize("theta_deg", [-25.0, 10.0, 30.0])
 def test_a_ground_slide_whose_hand_sticks_is_not_taken_for_a_hand_slide(theta_deg):
     """The control case: the ground slides 10 mm and the hand sticks. ``ŷ_o`` keeps its height, so
