@@ -178,6 +178,9 @@ class RunResult:
     goals: tuple[GoalResult, ...] = ()
     hand_angle_range: tuple[float, float] = (-math.pi, math.pi)
     """The hand angles the plant's robot reaches (rad)."""
+    force_headroom: float | None = None
+    """How far below the hand's largest force (N) the run's controller and planner kept the normal
+    force (:func:`plant_controls`; None: the controller parameters' own)."""
     last_usable: Estimate | None = None
     """The run's last estimate whose kinematics were valid (None if none was)."""
 
@@ -592,14 +595,17 @@ class _StepTracker:
         return (coordinates[k] - self.command.targets[k]) * math.copysign(1.0, step.delta) > step.tolerance
 
 
-def _within_turn_rate(params: ControllerParams, rate: float) -> ControllerParams:
-    """``params`` with the impedance target's angular speed capped at the plant's
-    :attr:`~ccopt.plant.base.Plant.hand_turn_rate` (rad/s): the whole step is scaled to it, so a
-    pivot keeps the direction that balances its wrench."""
+def plant_controls(params: ControllerParams, plant: Plant) -> ControllerParams:
+    """``params`` as the loop runs them on ``plant``: the impedance target's angular speed capped at
+    its :attr:`~ccopt.plant.base.Plant.hand_turn_rate` (rad/s; the whole step is scaled to it, so a
+    pivot keeps the direction that balances its wrench) and at least its
+    :attr:`~ccopt.plant.base.Plant.force_headroom` (N) below the hand's largest force."""
     normal, tangential, angular = params.max_speed
-    if angular <= rate:
-        return params
-    return dataclasses.replace(params, max_speed=(normal, tangential, rate))
+    return dataclasses.replace(
+        params,
+        max_speed=(normal, tangential, min(angular, plant.hand_turn_rate)),
+        force_headroom=max(params.force_headroom, plant.force_headroom),
+    )
 
 
 ROLL_RELEASE = 0.02
@@ -758,9 +764,9 @@ class _Loop:
         self.plant = make_plant(obj, params)
         self.sensors = Sensors(self.plant, params.sensor_params, seed)
         self.estimator = Estimator(params.hand, params.estimator_params)
-        controls = _within_turn_rate(params.controller_params, self.plant.hand_turn_rate)
+        controls = plant_controls(params.controller_params, self.plant)
         self.controller = Controller(params.hand, params.control_period, controls)
-        p = params.controller_params
+        p = controls
         self.goal = TargetGoal(
             params.hand.force_limits, p.normal_force, p.statics_margin, p.friction_step, p.slide_beyond,
             p.force_headroom,
@@ -983,6 +989,7 @@ class _Loop:
             folder=self.folder,
             goals=tuple(tracker.goal_results),
             hand_angle_range=tuple(self.plant.hand_angle_range),
+            force_headroom=self.goal.headroom,
             last_usable=self.last_usable,
         )
         if self.writer is not None:

@@ -135,8 +135,15 @@ class OracleFrame:
     lever: float
 
 
-def oracle_frame(obj: PlanarObject, params: LoopParams, hand_angle_range: tuple[float, float]) -> OracleFrame:
-    """The oracle's frame of a run of ``obj`` with ``params`` on a robot reaching ``hand_angle_range``.
+def oracle_frame(
+    obj: PlanarObject,
+    params: LoopParams,
+    hand_angle_range: tuple[float, float],
+    force_headroom: float | None = None,
+) -> OracleFrame:
+    """The oracle's frame of a run of ``obj`` with ``params`` on a robot reaching ``hand_angle_range``,
+    whose normal force stays ``force_headroom`` (N) below the hand's largest (None: the controller
+    parameters' headroom; a run's :attr:`~ccopt.closed_loop.RunResult.force_headroom` is its plant's).
 
     Its reach keeps the object on its start vertex a degree short of each tipping point
     (:data:`~ccopt.planning.sequencer.TIPPING_CLEARANCE`): the planner goes to the ends of its reach
@@ -153,7 +160,8 @@ def oracle_frame(obj: PlanarObject, params: LoopParams, hand_angle_range: tuple[
         min(hand_angle_range[1], high - TIPPING_CLEARANCE),
     )
     f_min, f_max = params.hand.force_limits
-    forces = (f_min, f_max - params.controller_params.force_headroom)
+    headroom = params.controller_params.force_headroom if force_headroom is None else force_headroom
+    forces = (f_min, f_max - headroom)
     lever = params.estimator_params.friction.torque_margin * params.hand.half_length
     return OracleFrame(start, truth, reach, (low, high), forces, lever)
 
@@ -230,7 +238,7 @@ def run_experiment(
         goals,
         len(schedule.goals),
     )
-    frame = oracle_frame(obj, params, result.hand_angle_range)
+    frame = oracle_frame(obj, params, result.hand_angle_range, result.force_headroom)
     for entry, goal in zip(summary["goals"], result.goals, strict=True):
         entry["oracle"] = goal_oracle(frame, data, goal)
     summary["message"] = result.message

@@ -113,6 +113,8 @@ class ControllerParams:
         force_headroom: the QP's predicted normal force and the statics' force targets stay this far
             (N) below the hand's largest force: the measured force overshoots the prediction by a
             few newtons in a push (3.7 N on a heavy triangle's ground slide aimed at the limit).
+            A closed loop keeps at least its plant's :attr:`~ccopt.plant.base.Plant.force_headroom`
+            (:func:`ccopt.closed_loop.plant_controls`).
         friction_step: how far beyond ``μ̂_h`` (the largest friction ratio the hand was seen to
             hold) a motion may explore the hand friction where ``μ̂_h`` leaves it short of its
             margin (:mod:`ccopt.control.targets`); 0 never explores.

@@ -147,6 +147,12 @@ class Plant(Protocol):
     """N: how far the hand force may differ from the impedance model ``K e + D ė`` (filtered, for as
     long as a sensor fault must last, :mod:`ccopt.health`) in fault-free runs of this plant: its
     inertia, and on an arm the coupling of its axes. The sensor-health check tolerates this much."""
+    force_headroom: float
+    """N: the least headroom the controller's predicted normal force and the statics' force targets
+    keep below the hand's largest force on this plant (:attr:`ControllerParams.force_headroom
+    <ccopt.control.controller.ControllerParams.force_headroom>` where larger): how far the measured
+    force runs above the impedance model in a push, so that it stays within the limit by about the
+    sensor noise."""
     hand_turn_rate: float
     """rad/s: the fastest the impedance target may turn the hand (``math.inf``: as fast as the
     controller's own limit). A turning hand lags its target and runs on past it when the target
