@@ -47,11 +47,11 @@ def status(out):
     return json.loads((out / "meta.json").read_text())["status"]
 
 
-def assert_loads(out):
-    """The record loads from its files and is one run's time series."""
+def assert_loads(out, least=10):
+    """The record loads from its files and is one run's time series of more than ``least`` samples."""
     loaded = record.load_record(out)
     time_ = loaded["time"]
-    assert len(time_) > 10 and np.all(np.diff(time_) > 0)
+    assert len(time_) > least and np.all(np.diff(time_) > 0)
     assert len(loaded["true_hand_wrench"]) == len(time_)
     return loaded
 
@@ -106,7 +106,7 @@ def test_ctrl_c_while_starting_leaves_no_folder(tmp_path, delay):
     else:
         assert delay > 0.3 and err[0].startswith("ccopt run: interrupted; the record so far is in"), err
         assert status(out) == "interrupted"
-        assert_loads(out)
+        assert_loads(out, least=0)  # the signal may come a few samples into the loop (5 seen)
 
 
 def test_ctrl_c_while_drawing_leaves_no_figure_cut_short(tmp_path):
