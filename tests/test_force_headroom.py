@@ -8,21 +8,10 @@ import numpy as np
 import pytest
 
 from ccopt import closed_loop
-from ccopt.control.controller import ControllerParams
 from ccopt.hand import Hand
 from ccopt.objects import make_object
 from ccopt.plant.mujoco_panda import PandaPlant
-from ccopt.plant.mujoco_planar import PlanarPlant
 from ccopt.schedule import load_schedule
-
-
-@pytest.mark.parametrize("plant", [PlanarPlant, PandaPlant])
-def test_the_loop_keeps_the_larger_of_its_own_and_the_plants_headroom(plant) -> None:
-    own = ControllerParams().force_headroom
-    kept = closed_loop.plant_controls(ControllerParams(), plant).force_headroom
-    assert kept == max(own, plant.force_headroom)
-    generous = ControllerParams(force_headroom=plant.force_headroom + 1.0)
-    assert closed_loop.plant_controls(generous, plant).force_headroom == plant.force_headroom + 1.0
 
 
 @pytest.mark.slow
