@@ -809,7 +809,14 @@ class _Loop:
 
     def _sequencer(self, index: int, goal: Goal, now: float) -> GoalSequencer:
         return GoalSequencer(
-            index, goal, now, self.plant.hand_angle_range, self.goal, PlannerParams(), self.tilt_limits
+            index,
+            goal,
+            now,
+            self.plant.hand_angle_range,
+            self.goal,
+            PlannerParams(),
+            self.tilt_limits,
+            self.params.estimator_params.kinematics.split_tilt,
         )
 
     def run(self) -> RunResult:

@@ -12,6 +12,7 @@
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 
 import numpy as np
@@ -20,7 +21,7 @@ import pytest
 from ccopt import statics
 from ccopt.closed_loop import LoopParams, start_config
 from ccopt.control.targets import TargetGoal
-from ccopt.estimation.estimator import Estimator
+from ccopt.estimation.estimator import Estimate, Estimator
 from ccopt.modes import Motion, motion_of
 from ccopt.objects import PlanarObject, from_vertices, make_object
 from ccopt.planning.graph import GraphParams
@@ -533,6 +534,54 @@ def test_failed_hand_slides_are_tried_twice_per_tilt_three_times_in_all_then_unr
     assert first.kind == "slide_hand"
     assert sequencer.next(1.0, at, 0.1, "slipped") == first
     assert sequencer.next(2.0, at, 0.1, "slipped") == first
+
+
+def test_a_ground_slide_lost_where_the_pose_cannot_tell_it_from_a_hand_slide_is_sought_past_there() -> None:
+    """Once the hand has slid, the kinematics let go of a ground slide within ``asin(position_noise /
+    valid_std)`` (9.6°) of the vertical (:func:`~ccopt.estimation.estimator.either_slides`). On an
+    object whose ground slides towards −s_g from +8° by the estimate (μ_g 0.2), every ground slide
+    the sequencer plans in that band here ends ``lost``. Each next one is planned at least half a
+    pivot step further, as after any failed slide; with the hand slid, the one after
+    ``lost_slide_tries`` such losses past the band (before the hand has slid the band does not
+    apply)."""
+    from tests.test_targets import S_H, known_estimate
+
+    kinematics = LoopParams().estimator_params.kinematics
+    band = math.asin(kinematics.position_noise / kinematics.valid_std)
+    slippery = statics.ObjectStatics.of_model(0.6, 0.2, 0.3, 0.03, 0.01, 0.02)
+    aim = TargetGoal(force_limits=(3.0, 25.0), nominal_force=8.0, margin=1.0, friction_step=0.1)
+    half = 0.5 * PlannerParams().pivot_step
+
+    def slide_tilts(hand_slid: bool) -> list[float]:
+        sequencer = GoalSequencer(
+            0, reach(s_g_mm=-10.0), 0.0, HAND_ANGLE_RANGE, aim, split_tilt=kinematics.split_tilt
+        )
+        theta, tilts = math.radians(8.0), []
+
+        def at(theta: float) -> Estimate:
+            return dataclasses.replace(known_estimate(slippery, theta, S_H, mu_h=0.5), hand_slid=hand_slid)
+
+        answer = sequencer.next(0.0, at(theta), 0.0)
+        while isinstance(answer, Step) and len(tilts) < 6:
+            status = "reached"
+            if answer.kind == "pivot":
+                theta += answer.delta
+            elif answer.kind == "slide_ground":
+                assert answer.delta < 0.0
+                tilts.append(theta)
+                if abs(theta) >= band:
+                    return tilts
+                status = "lost"
+            answer = sequencer.next(1.0, at(theta), 0.0, status)
+        raise AssertionError(f"no ground slide planned past the band: {answer}")
+
+    tries = GoalSequencer.lost_slide_tries
+    slid = slide_tilts(True)
+    assert len(slid) == tries + 1 and all(abs(tilt) < band for tilt in slid[:-1]) and slid[-1] <= -band
+    assert all(later <= earlier - half for earlier, later in itertools.pairwise(slid))
+    tried = slide_tilts(False)
+    assert len(tried) > tries + 1 and abs(tried[tries]) < band
+    assert all(later <= earlier - half for earlier, later in itertools.pairwise(tried))
 
 
 def test_a_ground_slide_possible_only_past_the_grid_is_planned_at_the_reach_end(

@@ -267,6 +267,7 @@ class Estimator:
         self._cone_input = np.zeros(12)
         self._contact_force = self.params.contact_force
         self._theta_noise = self.params.theta_filter.noise
+        self._split_tilt = self.params.kinematics.split_tilt
         self._last_reports: tuple = (None,) * 5  # (likely, commanded, unobservable, ground, reports)
         self._cone_ground: GroundCone | None = None
         self._last: Estimate | None = None
@@ -389,10 +390,8 @@ class Estimator:
 
     def _split_observable(self, theta_h: float) -> bool:
         """Whether the tilt separates a ground slide from a hand slide along the face by at least
-        ``valid_std`` in the pose: their difference is ``sin θ`` of the motion, so ``|sin θ| valid_std
-        ≥ position_noise`` (about 10° at the defaults)."""
-        kinematics = self.params.kinematics
-        return abs(math.sin(theta_h)) * kinematics.valid_std >= kinematics.position_noise
+        ``valid_std`` in the pose (:attr:`~.kinematics.KinematicsParams.split_tilt`)."""
+        return abs(theta_h) >= self._split_tilt
 
     def _rough(
         self, theta_o: float, kinematics: KinematicEstimate

@@ -220,6 +220,13 @@ class KinematicsParams:
         check_number("hand_slide_height", self.hand_slide_height)
         check_number("hand_slide_travel", self.hand_slide_travel)
 
+    @property
+    def split_tilt(self) -> float:
+        """rad: the least ``|θ|`` (up to 90°) at which the pose tells a ground slide from a hand
+        slide along the face, whose difference is ``sin θ`` of the motion, by ``valid_std``:
+        ``|sin θ| valid_std ≥ position_noise`` (9.6° at the defaults)."""
+        return math.asin(min(1.0, self.position_noise / self.valid_std))
+
 
 @dataclass(frozen=True)
 class KinematicEstimate:

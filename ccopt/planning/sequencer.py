@@ -39,6 +39,9 @@ such failures that way not at all, for the rest of the goal (:attr:`GoalSequence
 A goal the estimate then leaves no way to is ``unreachable``, its reason naming the failed slides.
 A hand slide that slid the ground instead is not one of them: the object moved, and sought at other
 tilts the next slides slid it further (on the goals study they tipped a quadrilateral over).
+A ground slide that did not start is sought next half a pivot step further that way; one ``lost``
+near the vertical once the hand has slid, where the pose cannot tell it from a hand slide, past
+that band (:meth:`GoalSequencer._failed_slide`).
 
 ``s_g`` goals are measured from ``s_g_origin``: the run's start ground contact as the estimate knows
 it, the latest usable estimate while the ground has neither been commanded to slide nor seen moving
@@ -128,11 +131,16 @@ class GoalSequencer:
         aim: force limits and margin of the estimated statics (:class:`~ccopt.control.targets.TargetGoal`;
             its headroom narrows the planner's force range, its friction step is the exploration).
         params: the planner's parameters.
+        tilt_limits: the run's tilt limits so far (:attr:`tilt_limits`; shared by its goals).
+        split_tilt: the least ``|θ_o|`` (rad) at which the estimator tells a ground slide from a
+            hand slide by the pose (:attr:`~ccopt.estimation.kinematics.KinematicsParams.split_tilt`;
+            0: at every tilt): see :meth:`_failed_slide`.
     """
 
     max_misses = 3
     max_explorations = 2
     max_hand_slide_failures = 3
+    lost_slide_tries = 2
     hand_slide_tries_per_tilt = 2
 
     def __init__(
@@ -144,8 +152,10 @@ class GoalSequencer:
         aim: TargetGoal,
         params: PlannerParams | None = None,
         tilt_limits: dict[int, float] | None = None,
+        split_tilt: float = 0.0,
     ) -> None:
         self.index = index
+        self.split_tilt = split_tilt
         self.goal = goal
         self.start_time = start_time
         self.reach = reach
@@ -159,6 +169,9 @@ class GoalSequencer:
         goals share it (it is the object's, not the goal's)."""
         self.failed_slides: dict[int, float] = {}
         """Per way (``±1``), the tilt (rad) of the last ground slide that did not start."""
+        self.unobservable_slides: dict[int, list[float]] = {}
+        """Per way (``±1``), the tilts (rad) of the ground slides lost where the pose cannot tell
+        them from a hand slide (:meth:`_failed_slide`)."""
         self.failed_hand_slides: dict[int, list[float]] = {}
         """Per way (``±1``), the tilts (rad) of the hand slides the hand held against (ended
         ``rolled`` or ``timeout``): see :meth:`_barred`."""
@@ -183,7 +196,7 @@ class GoalSequencer:
             step, tilt = self._last
             way = 1 if step.delta > 0 else -1
             if step.kind == "slide_ground":
-                self.failed_slides[way] = tilt
+                self._failed_slide(tilt, way, last_status, estimate)
             if step.kind == "slide_hand" and last_status in HELD:
                 self.failed_hand_slides.setdefault(way, []).append(tilt)
             if step.kind == "pivot" and last_status == "rolled":
@@ -257,6 +270,31 @@ class GoalSequencer:
             return plan
         return Plan(bolder.status, bolder.motion, bolder.reason, bolder.path, explores=True)
 
+    def _failed_slide(self, tilt: float, way: int, status: str, estimate: Estimate) -> None:
+        """Record a ground slide towards ``way`` that began at ``tilt`` (rad) and ended ``status``
+        as failed (:attr:`failed_slides`: :func:`~ccopt.planning.planner.next_motion` seeks the next
+        one at least half a pivot step further that way).
+
+        A slide ``lost`` once the hand has slid, within :attr:`split_tilt` of the vertical (and a
+        pivot's tolerance, within which the pivot before it ended), is one the kinematics let go
+        of because the forces brought the hand to its friction limit too, and the pose cannot tell
+        the ground's slide from the hand's (:func:`~ccopt.estimation.estimator.either_slides`).
+        Half a pivot step further the hand needs less of its friction, and a retry there may slide
+        the ground (a goals-study quadrilateral's at 9.8° slid the hand 3.9 mm, its retry at 2.2°
+        the ground 9.4 mm). After :attr:`lost_slide_tries` such slides that way, the next is
+        sought past the band's far edge, where the pose tells the two slides apart: on the goals
+        study (seed 1) the ground slides towards ``−s_g`` of three random objects were lost at
+        9.6°, 2° and −5° in turn, an exploration after each, until the goal failed."""
+        band = self.split_tilt + float(DEFAULT_TOLERANCE["pivot"])
+        if status != "lost" or not estimate.hand_slid or abs(tilt) > band:
+            self.failed_slides[way] = tilt
+            return
+        lost = self.unobservable_slides.setdefault(way, [])
+        lost.append(tilt)
+        edge = way * (self.split_tilt - 0.5 * self.params.pivot_step)
+        jump = len(lost) >= self.lost_slide_tries and (edge - tilt) * way > 0.0
+        self.failed_slides[way] = edge if jump else tilt
+
     def _barred(self, theta: float, motion: Motion) -> bool:
         """Whether ``motion`` failed :attr:`hand_slide_tries_per_tilt` times within half a pivot
         step of the tilt ``theta`` (rad), or :attr:`max_hand_slide_failures` times in all.
@@ -281,12 +319,18 @@ class GoalSequencer:
         return near >= self.hand_slide_tries_per_tilt
 
     def _failures(self) -> str:
-        """The failed hand slides, for an ``unreachable`` reason ("" if none)."""
+        """The failed hand slides and the ground slides lost where the pose cannot tell them from a
+        hand slide, for an ``unreachable`` reason ("" if none)."""
         tried = [
-            f"{towards(way, 's_h')} at " + ", ".join(f"{math.degrees(tilt):.0f}°" for tilt in tilts)
-            for way, tilts in self.failed_hand_slides.items()
+            f"hand slides tried and failed {_ways(self.failed_hand_slides, 's_h')}"
+            if self.failed_hand_slides else "",
+            f"ground slides lost {_ways(self.unobservable_slides, 's_g')}, where within "
+            f"{math.degrees(self.split_tilt):.1f}° of the vertical the pose cannot tell them from "
+            "a hand slide"
+            if self.unobservable_slides else "",
         ]
-        return f" (hand slides tried and failed {'; '.join(tried)})" if tried else ""
+        said = "; ".join(part for part in tried if part)
+        return f" ({said})" if said else ""
 
     def _reach(self) -> tuple[float, float]:
         """The robot's reach, cut at the tilts where a pivot rolled the hand."""
@@ -320,6 +364,14 @@ class GoalSequencer:
     def end(self, now: float, status: str, reason: str = "") -> GoalResult:
         """The goal's result, ending now with ``status``."""
         return GoalResult(self.index, self.goal, self.start_time, now, status, reason, self.motions)
+
+
+def _ways(tilts: dict[int, list[float]], coordinate: str) -> str:
+    """``towards ±coordinate at a°, b°`` for each way's tilts (rad), joined by "; "."""
+    return "; ".join(
+        f"{towards(way, coordinate)} at " + ", ".join(f"{math.degrees(tilt):.0f}°" for tilt in each)
+        for way, each in tilts.items()
+    )
 
 
 TIPPING_CLEARANCE = math.radians(1.0)
