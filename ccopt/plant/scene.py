@@ -120,9 +120,6 @@ def contact_pairs_xml(obj: PlanarObject, params: PlantParams, hand_geom: str) ->
     )
 
 
-_CONTACT_DIMS = np.arange(3)
-
-
 def pair_wrench(data: mujoco.MjData, geom_a: int, geom_b: int, about: np.ndarray) -> np.ndarray:
     """Planar world wrench ``(f_x, f_y, τ)`` that geom ``geom_a`` exerts on geom ``geom_b``.
 
@@ -131,21 +128,38 @@ def pair_wrench(data: mujoco.MjData, geom_a: int, geom_b: int, about: np.ndarray
     ``efc_force`` in the contact frame (normal from ``geom[0]`` to ``geom[1]``). Requires the
     elliptic cones of :func:`option_xml` and ``condim = 3`` pairs (:func:`pair_xml`).
     """
-    contact = data.contact
     if data.ncon == 0:
         return np.zeros(3)
-    geoms = contact.geom
-    forward = (geoms[:, 0] == geom_a) & (geoms[:, 1] == geom_b)
-    backward = (geoms[:, 0] == geom_b) & (geoms[:, 1] == geom_a)
-    selected = np.flatnonzero(forward | backward)
-    address = contact.efc_address[selected]
-    selected, address = selected[address >= 0], address[address >= 0]
-    if selected.size == 0:
+    forces, x_levers, y_levers = _pair_forces(data, geom_a, geom_b, about)
+    if not forces:
         return np.zeros(3)
-    local = data.efc_force[address[:, None] + _CONTACT_DIMS]
-    world = np.einsum("ki,kij->kj", local, contact.frame[selected].reshape(-1, 3, 3))
-    world[backward[selected]] *= -1.0
+    world = np.array(forces)  # rows (f_x, 0, f_y): the sums and dot products see strided columns
     fx, fy = world[:, 0], world[:, 2]
-    px = contact.pos[selected, 0] - about[0]
-    py = contact.pos[selected, 2] - about[1]
+    px, py = np.array(x_levers), np.array(y_levers)
     return np.array([fx.sum(), fy.sum(), float(px @ fy - py @ fx)])
+
+
+def _pair_forces(
+    data: mujoco.MjData, geom_a: int, geom_b: int, about: np.ndarray
+) -> tuple[list[list[float]], list[float], list[float]]:
+    """Per contact of ``geom_a`` on ``geom_b`` with a force, in contact order: its world force
+    ``(f_x, 0, f_y)`` (N) and its position from ``about``, ``p_x`` and ``p_y`` (m). Plain floats: a
+    handful of contacts costs less in Python than in NumPy calls."""
+    contact = data.contact
+    efc_force = data.efc_force
+    frames, positions = contact.frame.tolist(), contact.pos.tolist()
+    x_about, y_about = float(about[0]), float(about[1])
+    forces, x_levers, y_levers = [], [], []
+    pairs = zip(contact.geom.tolist(), contact.efc_address.tolist(), strict=True)
+    for k, ((geom_0, geom_1), address) in enumerate(pairs):
+        backward = geom_0 == geom_b and geom_1 == geom_a
+        if address < 0 or not (backward or (geom_0 == geom_a and geom_1 == geom_b)):
+            continue
+        normal, tangent_1, tangent_2 = efc_force[address : address + 3].tolist()
+        frame = frames[k]  # rows: normal, tangent 1, tangent 2 (world)
+        f_x = normal * frame[0] + tangent_1 * frame[3] + tangent_2 * frame[6]
+        f_y = normal * frame[2] + tangent_1 * frame[5] + tangent_2 * frame[8]
+        forces.append([-f_x, 0.0, -f_y] if backward else [f_x, 0.0, f_y])
+        x_levers.append(positions[k][0] - x_about)
+        y_levers.append(positions[k][2] - y_about)
+    return forces, x_levers, y_levers
