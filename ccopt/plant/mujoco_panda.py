@@ -261,10 +261,13 @@ class PandaPlant(MujocoPlant):
         self._planar_to_spatial = TASK_AXES[:3].T.copy()
         self._target_twist = np.zeros(6)
         self._error = np.zeros(6)
+        self._position_error, self._rotation_error = self._error[:3], self._error[3:]
+        self._rotation_gap = np.eye(3)  # R_target R_handᵀ
         self._hand_rotation = np.eye(3)
         self._gram = np.zeros((6, 6))
         self._range = np.zeros(6)
         self._q, self._v = self._data.qpos[self._arm_q], self._data.qvel[self._arm_v]
+        self._ctrl = self._data.ctrl
 
         self._data.qpos[self._arm_q] = q_start
         self._data.qpos[self._obj_qpos] = object_pose
@@ -332,24 +335,28 @@ class PandaPlant(MujocoPlant):
         mujoco.mj_comVel(model, data)
 
     def _control(self) -> None:
-        """Set the joint torques of the Cartesian impedance from the current joint state."""
+        """Set the joint torques of the Cartesian impedance from the current joint state.
+
+        Products go through ``np.dot`` into preallocated arrays: the BLAS calls of ``@``, at less cost.
+        """
         model, data, frame = self.panda.model, self.panda.data, self.panda.hand_frame
         q, v = self._q, self._v
         jac = pin.computeFrameJacobian(model, data, q, frame, pin.LOCAL_WORLD_ALIGNED)
         placement = data.oMf[frame]
         self._hand_rotation[:] = placement.rotation
-        self._error[:3] = self._target_position - placement.translation
-        self._error[3:] = pin.log3(self._target_rotation @ self._hand_rotation.T)
-        wrench = self._stiffness @ self._error + self._damping @ (self._target_twist - jac @ v)
+        np.subtract(self._target_position, placement.translation, out=self._position_error)
+        np.dot(self._target_rotation, self._hand_rotation.T, out=self._rotation_gap)
+        self._rotation_error[:] = pin.log3(self._rotation_gap)
+        wrench = np.dot(self._stiffness, self._error)
+        wrench += np.dot(self._damping, self._target_twist - np.dot(jac, v))
         posture = self._null_stiffness * (self._posture - q) - self._null_damping * v
         # Null-space projection N·posture = posture − Jᵀ (J Jᵀ)⁻¹ J·posture, by an in-place Cholesky.
-        np.matmul(jac, jac.T, out=self._gram)
+        np.dot(jac, jac.T, out=self._gram)
         mujoco.mju_cholFactor(self._gram, 0.0)
-        mujoco.mju_cholSolve(self._range, self._gram, jac @ posture)
-        torque = jac.T @ (wrench - self._range)
+        mujoco.mju_cholSolve(self._range, self._gram, np.dot(jac, posture))
+        torque = np.dot(jac.T, wrench - self._range, out=self._ctrl)
         torque += posture
         torque += pin.nonLinearEffects(model, data, q, v)
-        self._data.ctrl[:] = torque
 
     # --- state -----------------------------------------------------------------------------------
 
