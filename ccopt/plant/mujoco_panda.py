@@ -241,6 +241,12 @@ class PandaPlant(MujocoPlant):
             raise RuntimeError(f"expected consecutive F/T sensor addresses, got {force}, {torque}")
         self._ft = slice(force, force + 6)
         self._hand_site = m.site(HAND_SITE).id
+        self._ft_reading = self._data.sensordata[self._ft]  # views: MjData's arrays never move
+        self._face_position = self._data.site_xpos[self._hand_site]
+        self._face_rotation = self._data.site_xmat[self._hand_site].reshape(3, 3)
+        self._plate_rotation_t = self.plate.rotation.T
+        self._pose: np.ndarray | None = None  # hand_pose and hand_wrench of this step, once read
+        self._wrench: np.ndarray | None = None
 
         self.gains: ImpedanceGains = impedance_gains(
             self.panda,
@@ -256,6 +262,7 @@ class PandaPlant(MujocoPlant):
         self._posture = q_start.copy()
         self._null_stiffness, self._null_damping = self.gains.null_stiffness, self.gains.null_damping
         self._target = np.full(3, np.nan)
+        self._target_angle = math.nan  # of _target_rotation
         self._target_position = np.array([0.0, self.panda_params.mount.plane_y, 0.0])
         self._target_rotation = np.eye(3)
         self._planar_to_spatial = TASK_AXES[:3].T.copy()
@@ -283,17 +290,19 @@ class PandaPlant(MujocoPlant):
 
     def set_target(self, pose: ArrayLike, velocity: ArrayLike | None = None) -> None:
         """Hand impedance target, world ``(x, y, θ)`` (m, rad), and its velocity (m/s, rad/s)."""
-        x, y, theta = planar_vector("target pose", pose).tolist()
-        if theta != self._target[2]:
+        target = planar_vector("target pose", pose)
+        x, y, theta = target.tolist()
+        if theta != self._target_angle:
             self._target_rotation[:] = hand_rotation(theta)
-        self._target[:] = (x, y, theta)
-        self._target_position[0], self._target_position[2] = x, y
+            self._target_angle = theta
+        self._target[:] = target
+        self._target_position[0] = x
+        self._target_position[2] = y
         if velocity is None:
             self._target_twist[:] = 0.0
         else:
-            np.matmul(
-                self._planar_to_spatial, planar_vector("target velocity", velocity), out=self._target_twist
-            )
+            twist = planar_vector("target velocity", velocity)
+            np.dot(self._planar_to_spatial, twist, out=self._target_twist)
 
     def target(self) -> np.ndarray:
         """Current impedance target, world ``(x, y, θ)``."""
@@ -333,6 +342,7 @@ class PandaPlant(MujocoPlant):
         mujoco.mj_kinematics(model, data)
         mujoco.mj_comPos(model, data)
         mujoco.mj_comVel(model, data)
+        self._pose = self._wrench = None
 
     def _control(self) -> None:
         """Set the joint torques of the Cartesian impedance from the current joint state.
@@ -365,10 +375,11 @@ class PandaPlant(MujocoPlant):
         return self._data.qpos[self._arm_q].copy()
 
     def hand_pose(self) -> np.ndarray:
-        """True world ``(x_h, y_h, θ_h)`` of the hand contact-face centre (MuJoCo's kinematics)."""
-        return planar_pose(
-            self._data.site_xpos[self._hand_site], self._data.site_xmat[self._hand_site].reshape(3, 3)
-        )
+        """True world ``(x_h, y_h, θ_h)`` of the hand contact-face centre (MuJoCo's kinematics; worked
+        out once a step: the sensors, the truth and the record read it)."""
+        if self._pose is None:
+            self._pose = planar_pose(self._face_position, self._face_rotation)
+        return self._pose.copy()
 
     def hand_velocity(self) -> np.ndarray:
         """True world ``(ẋ_h, ẏ_h, θ̇_h)`` of the contact-face centre."""
@@ -383,9 +394,12 @@ class PandaPlant(MujocoPlant):
         return self._data.sensordata[self._ft].copy()
 
     def hand_wrench(self) -> np.ndarray:
-        """Hand wrench ``(f_n, f_t, τ)`` on the object, from the F/T reading (gravity-compensated)."""
-        flange_rotation = self._hand_rotation @ self.plate.rotation.T
-        return hand_wrench(self._data.sensordata[self._ft], flange_rotation, self.plate)
+        """Hand wrench ``(f_n, f_t, τ)`` on the object, from the F/T reading (gravity-compensated;
+        worked out once a step, like :meth:`hand_pose`)."""
+        if self._wrench is None:
+            flange_rotation = np.dot(self._hand_rotation, self._plate_rotation_t)
+            self._wrench = hand_wrench(self._ft_reading, flange_rotation, self.plate)
+        return self._wrench.copy()
 
     def hand_wrench_world(self) -> np.ndarray:
         """True world wrench ``(f_x, f_y, τ)`` of the hand on the object from the contact forces,
