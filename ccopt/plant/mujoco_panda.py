@@ -275,6 +275,7 @@ class PandaPlant(MujocoPlant):
         self._range = np.zeros(6)
         self._q, self._v = self._data.qpos[self._arm_q], self._data.qvel[self._arm_v]
         self._ctrl = self._data.ctrl
+        self._hand_placement = self.panda.data.oMf[self.panda.hand_frame]  # follows the Pinocchio data
 
         self._data.qpos[self._arm_q] = q_start
         self._data.qpos[self._obj_qpos] = object_pose
@@ -352,7 +353,7 @@ class PandaPlant(MujocoPlant):
         model, data, frame = self.panda.model, self.panda.data, self.panda.hand_frame
         q, v = self._q, self._v
         jac = pin.computeFrameJacobian(model, data, q, frame, pin.LOCAL_WORLD_ALIGNED)
-        placement = data.oMf[frame]
+        placement = self._hand_placement  # the frame's placement computeFrameJacobian just updated
         self._hand_rotation[:] = placement.rotation
         np.subtract(self._target_position, placement.translation, out=self._position_error)
         np.dot(self._target_rotation, self._hand_rotation.T, out=self._rotation_gap)
