@@ -171,12 +171,19 @@ class MujocoPlant:
         """True world wrench ``(f_x, f_y, τ)`` of the ground on the object, ``τ`` about its centroid."""
         raise NotImplementedError
 
+    def _contact_forces(self) -> tuple[tuple[float, float], tuple[float, float]]:
+        """True world forces ``(f_x, f_y)`` (N) of the hand and of the ground on the object: the
+        forces of :meth:`hand_wrench_world` and :meth:`ground_wrench` (what :meth:`truth` reads)."""
+        hand, ground = self.hand_wrench_world().tolist(), self.ground_wrench().tolist()
+        return (hand[0], hand[1]), (ground[0], ground[1])
+
     def truth(self) -> Truth:
         """Ground truth of the contact configuration (see :mod:`ccopt.plant.truth`); ``θ_o`` is that
         of the start configuration's hand face; the ground contact is the last read's vertex while
         it stays within :data:`~ccopt.plant.truth.GROUND_VERTEX_HYSTERESIS` of the lowest."""
         pose = self.hand_pose()
-        hand_force = geometry.wrench_world_to_hand(float(pose[2]), self.hand_wrench_world())[0]
+        hand, ground = self._contact_forces()
+        hand_force = geometry.wrench_world_to_hand(float(pose[2]), (*hand, 0.0))[0]  # f_n: no torque in it
         truth = compute_truth(
             time=self.time,
             obj=self.obj,
@@ -186,7 +193,7 @@ class MujocoPlant:
             hand_pose=pose,
             hand_velocity=self.hand_velocity(),
             in_contact_hand=hand_force > CONTACT_FORCE_MIN,
-            in_contact_ground=self.ground_wrench()[1] > CONTACT_FORCE_MIN,
+            in_contact_ground=ground[1] > CONTACT_FORCE_MIN,
             previous_vertex=self._ground_vertex,
         )
         self._ground_vertex = truth.ground_vertex

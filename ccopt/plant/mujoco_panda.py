@@ -246,6 +246,8 @@ class PandaPlant(MujocoPlant):
         self._face_rotation = self._data.site_xmat[self._hand_site].reshape(3, 3)
         self._plate_rotation_t = self.plate.rotation.T
         self._pose: np.ndarray | None = None  # hand_pose and hand_wrench of this step, once read
+        self._site_velocity, self._spatial_velocity = np.zeros(6), np.zeros(6)
+        self._planar_axes = TASK_AXES[:3]
         self._wrench: np.ndarray | None = None
 
         self.gains: ImpedanceGains = impedance_gains(
@@ -384,11 +386,12 @@ class PandaPlant(MujocoPlant):
 
     def hand_velocity(self) -> np.ndarray:
         """True world ``(ẋ_h, ẏ_h, θ̇_h)`` of the contact-face centre."""
-        velocity = np.zeros(6)
-        mujoco.mj_objectVelocity(
-            self._model, self._data, mujoco.mjtObj.mjOBJ_SITE, self._hand_site, velocity, 0
-        )
-        return TASK_AXES[:3] @ np.concatenate((velocity[3:], velocity[:3]))
+        velocity, spatial = self._site_velocity, self._spatial_velocity
+        site = mujoco.mjtObj.mjOBJ_SITE
+        mujoco.mj_objectVelocity(self._model, self._data, site, self._hand_site, velocity, 0)
+        spatial[:3] = velocity[3:]  # MuJoCo's (ω, v) to (v, ω)
+        spatial[3:] = velocity[:3]
+        return np.dot(self._planar_axes, spatial)
 
     def flange_wrench(self) -> np.ndarray:
         """Wrist F/T reading: wrench of the flange on the plate, flange frame, about the flange (N, N·m)."""
@@ -410,3 +413,9 @@ class PandaPlant(MujocoPlant):
     def ground_wrench(self) -> np.ndarray:
         """True world wrench ``(f_x, f_y, τ)`` of the ground on the object, ``τ`` about its centroid."""
         return scene.pair_wrench(self._data, self._ground_geom, self._object_geom, self.object_pose()[:2])
+
+    def _contact_forces(self) -> tuple[tuple[float, float], tuple[float, float]]:
+        """True world forces ``(f_x, f_y)`` (N) of the hand and of the ground on the object, from the
+        contacts (:func:`ccopt.plant.scene.pair_force`: their torques are not worked out)."""
+        data, obj = self._data, self._object_geom
+        return scene.pair_force(data, self._hand_geom, obj), scene.pair_force(data, self._ground_geom, obj)

@@ -128,28 +128,37 @@ def pair_wrench(data: mujoco.MjData, geom_a: int, geom_b: int, about: np.ndarray
     ``efc_force`` in the contact frame (normal from ``geom[0]`` to ``geom[1]``). Requires the
     elliptic cones of :func:`option_xml` and ``condim = 3`` pairs (:func:`pair_xml`).
     """
-    if data.ncon == 0:
-        return np.zeros(3)
-    forces, x_levers, y_levers = _pair_forces(data, geom_a, geom_b, about)
+    forces, contacts = _pair_forces(data, geom_a, geom_b)
     if not forces:
         return np.zeros(3)
     world = np.array(forces)  # rows (f_x, 0, f_y): the sums and dot products see strided columns
     fx, fy = world[:, 0], world[:, 2]
-    px, py = np.array(x_levers), np.array(y_levers)
+    positions = data.contact.pos.tolist()
+    x_about, y_about = float(about[0]), float(about[1])
+    px = np.array([positions[k][0] - x_about for k in contacts])
+    py = np.array([positions[k][2] - y_about for k in contacts])
     return np.array([fx.sum(), fy.sum(), float(px @ fy - py @ fx)])
 
 
-def _pair_forces(
-    data: mujoco.MjData, geom_a: int, geom_b: int, about: np.ndarray
-) -> tuple[list[list[float]], list[float], list[float]]:
-    """Per contact of ``geom_a`` on ``geom_b`` with a force, in contact order: its world force
-    ``(f_x, 0, f_y)`` (N) and its position from ``about``, ``p_x`` and ``p_y`` (m). Plain floats: a
-    handful of contacts costs less in Python than in NumPy calls."""
+def pair_force(data: mujoco.MjData, geom_a: int, geom_b: int) -> tuple[float, float]:
+    """World force ``(f_x, f_y)`` (N) that geom ``geom_a`` exerts on geom ``geom_b``: the force of
+    :func:`pair_wrench`, without its torque."""
+    forces, _ = _pair_forces(data, geom_a, geom_b)
+    if not forces:
+        return 0.0, 0.0
+    world = np.array(forces)
+    return float(world[:, 0].sum()), float(world[:, 2].sum())
+
+
+def _pair_forces(data: mujoco.MjData, geom_a: int, geom_b: int) -> tuple[list[list[float]], list[int]]:
+    """The world force ``(f_x, 0, f_y)`` (N) of ``geom_a`` on ``geom_b`` at each of their contacts
+    that has one, and those contacts' indices, in contact order. Plain floats: a handful of
+    contacts costs less in Python than in NumPy calls."""
+    if data.ncon == 0:
+        return [], []
     contact = data.contact
-    efc_force = data.efc_force
-    frames, positions = contact.frame.tolist(), contact.pos.tolist()
-    x_about, y_about = float(about[0]), float(about[1])
-    forces, x_levers, y_levers = [], [], []
+    efc_force, frames = data.efc_force, contact.frame.tolist()
+    forces, contacts = [], []
     pairs = zip(contact.geom.tolist(), contact.efc_address.tolist(), strict=True)
     for k, ((geom_0, geom_1), address) in enumerate(pairs):
         backward = geom_0 == geom_b and geom_1 == geom_a
@@ -160,6 +169,5 @@ def _pair_forces(
         f_x = normal * frame[0] + tangent_1 * frame[3] + tangent_2 * frame[6]
         f_y = normal * frame[2] + tangent_1 * frame[5] + tangent_2 * frame[8]
         forces.append([-f_x, 0.0, -f_y] if backward else [f_x, 0.0, f_y])
-        x_levers.append(positions[k][0] - x_about)
-        y_levers.append(positions[k][2] - y_about)
-    return forces, x_levers, y_levers
+        contacts.append(k)
+    return forces, contacts
