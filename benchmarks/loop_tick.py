@@ -1,18 +1,19 @@
 """Where a closed-loop tick spends its time at 1 kHz, and how fast whole runs go.
 
-    python -m benchmarks.loop_tick [--quick] [--json PATH] [--seed N]
+    python -m benchmarks.loop_tick [--quick] [--json PATH] [--seed N] [--plant {planar,panda}]
 
-The paper triangle runs the ``smoke`` schedule on the planar plant with the estimator and the
-controller at 1 kHz, recorded to a temporary folder as ``ccopt run`` records. In one instrumented run
-every part of the tick is timed where the loop calls it (the plant's steps, the sensors, the
-estimator, the statics target, the controller — QP instance, solve and checks —, ground truth and
-the record, the sensor-health check; the rest is the loop's own bookkeeping). The controller's ticks
-of that run are then replayed twice on the same inputs: with the code-generated QP, and with the
-paper authors' solver path (mcubelab/pbal, ``src/Modelling/modular_barrier_controller.py``: cvxopt's
-``solvers.qp`` with ``maxiters = 10`` and tolerances of 1e-6, its answer taken whatever its status).
-Uninstrumented runs give the real-time factors (simulated over wall time of the loop, one core):
-planar at 1 kHz, planar at the paper's rates (100 Hz estimator, 30 Hz controller) and the Panda at
-1 kHz; each is the median of ``--repeats`` runs (best in brackets: the machine may be shared).
+The paper triangle runs the ``smoke`` schedule on the planar plant (or the ``--plant`` given) with
+the estimator and the controller at 1 kHz, recorded to a temporary folder as ``ccopt run`` records.
+In one instrumented run every part of the tick is timed where the loop calls it (the plant's steps,
+the sensors, the estimator, the statics target, the controller — QP instance, solve and checks —,
+ground truth and the record, the sensor-health check; the rest is the loop's own bookkeeping). The
+controller's ticks of that run are then replayed twice on the same inputs: with the code-generated
+QP, and with the paper authors' solver path (mcubelab/pbal,
+``src/Modelling/modular_barrier_controller.py``: cvxopt's ``solvers.qp`` with ``maxiters = 10`` and
+tolerances of 1e-6, its answer taken whatever its status). Uninstrumented runs give the real-time
+factors (simulated over wall time of the loop, one core): planar at 1 kHz, planar at the paper's
+rates (100 Hz estimator, 30 Hz controller) and the Panda at 1 kHz; each is the median of
+``--repeats`` runs (best in brackets: the machine may be shared).
 """
 
 from __future__ import annotations
@@ -75,11 +76,11 @@ def _params(plant: str, rates: tuple[float, float]) -> LoopParams:
 
 
 def instrumented_run(
-    seed: int, folder: Path
+    seed: int, folder: Path, plant: str = "planar"
 ) -> tuple[list[Timed], float, int, list[tuple[ControlInput, Command]], LoopParams]:
-    """One 1 kHz planar run with every part timed where it is called: the parts, the loop's wall time
-    (s), its plant steps and the controller's inputs (to replay)."""
-    params = _params("planar", KHZ)
+    """One 1 kHz run on ``plant`` with every part timed where it is called: the parts, the loop's wall
+    time (s), its plant steps and the controller's inputs (to replay)."""
+    params = _params(plant, KHZ)
     loop = closed_loop._Loop(make_object(OBJECT), load_schedule(SCHEDULE), params, seed, folder, {}, None)
     stores: dict[str, list[float]] = {}
     for name, holder, method in _PARTS:
@@ -133,10 +134,12 @@ def real_time_factor(plant: str, rates: tuple[float, float], seed: int, repeats:
     return float(np.median(factors)), float(np.max(factors))
 
 
-def run(seed: int, repeats: int) -> tuple[dict[str, float | int], list[tuple[str, ...]]]:
-    """The figures and the breakdown table's rows."""
+def run(
+    seed: int, repeats: int, plant: str = "planar"
+) -> tuple[dict[str, float | int], list[tuple[str, ...]]]:
+    """The figures and the breakdown table's rows (the breakdown's run on ``plant``)."""
     with tempfile.TemporaryDirectory() as folder:
-        parts, wall, steps, inputs, params = instrumented_run(seed, Path(folder) / "run")
+        parts, wall, steps, inputs, params = instrumented_run(seed, Path(folder) / "run", plant)
     figures: dict[str, float | int] = {"plant_steps": steps, "loop_us_per_step": wall / steps * 1e6}
     rows = []
     accounted = 0.0
@@ -183,9 +186,12 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser = benchmark_parser(
         "loop_tick", __doc__, "one run per real-time factor instead of three", seed="run seed"
     )
+    parser.add_argument(
+        "--plant", choices=("planar", "panda"), default="planar", help="the plant whose tick is broken down"
+    )
     args = parser.parse_args(argv)
-    figures, rows = run(args.seed, 1 if args.quick else 3)
-    print(f"Closed-loop tick at 1 kHz: {OBJECT}, {SCHEDULE}, planar plant, recorded; one core, µs")
+    figures, rows = run(args.seed, 1 if args.quick else 3, args.plant)
+    print(f"Closed-loop tick at 1 kHz: {OBJECT}, {SCHEDULE}, {args.plant} plant, recorded; one core, µs")
     print_table(rows, ("part", "calls", "median", "p99", "per plant step"))
     print()
     controller = [
