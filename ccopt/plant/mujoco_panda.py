@@ -246,9 +246,9 @@ class PandaPlant(MujocoPlant):
         self._face_rotation = self._data.site_xmat[self._hand_site].reshape(3, 3)
         self._plate_rotation_t = self.plate.rotation.T
         self._pose: np.ndarray | None = None  # hand_pose and hand_wrench of this step, once read
-        self._site_velocity, self._spatial_velocity = np.zeros(6), np.zeros(6)
-        self._planar_axes = TASK_AXES[:3]
         self._wrench: np.ndarray | None = None
+        self._site_velocity, self._spatial_velocity = np.zeros(6), np.zeros(6)  # MuJoCo's (ω, v), (v, ω)
+        self._planar_axes = TASK_AXES[:3]
 
         self.gains: ImpedanceGains = impedance_gains(
             self.panda,

@@ -165,7 +165,7 @@ def _pair_forces(data: mujoco.MjData, geom_a: int, geom_b: int) -> tuple[list[li
         if address < 0 or not (backward or (geom_0 == geom_a and geom_1 == geom_b)):
             continue
         normal, tangent_1, tangent_2 = efc_force[address : address + 3].tolist()
-        frame = frames[k]  # rows: normal, tangent 1, tangent 2 (world)
+        frame = frames[k]  # rows: normal, tangent 1, tangent 2 (world); np.einsum's products and sums
         f_x = normal * frame[0] + tangent_1 * frame[3] + tangent_2 * frame[6]
         f_y = normal * frame[2] + tangent_1 * frame[5] + tangent_2 * frame[8]
         forces.append([-f_x, 0.0, -f_y] if backward else [f_x, 0.0, f_y])
