@@ -355,6 +355,9 @@ class _StepTracker:
         self.roll_tilt: float | None = None
         """The estimated ``θ_o`` (rad) where the torque row that ends the pivot under way ``rolled``
         (:meth:`_rolled`) last became tight: where the object stopped turning."""
+        self.held_tilts = NO_TILTS
+        """``(low, high)``: the estimated ``θ_o`` (rad) range of the ends of the pivots ``reached``
+        since the kinematics were last unusable at a step's end (:meth:`_hold_tilts`)."""
         self.fresh = False
         """Whether the current step has not been controlled yet (the estimated statics judge it then)."""
 
@@ -385,6 +388,7 @@ class _StepTracker:
             step, goal = self.active, self.goal.index if self.goal is not None else None
             ended = (self.start_time, now, status, reason, step.explore, goal)
             self.results.append(StepResult(self.index, step.kind, step.delta, *ended))
+            self._hold_tilts(step, status, estimate)
             last = status
         step = self._next(now, estimate, last, float(hand_pose[2]))
         if step is None:
@@ -415,6 +419,15 @@ class _StepTracker:
         self.fresh = True
         return current
 
+    def _hold_tilts(self, step: Step, status: str, estimate: Estimate) -> None:
+        """Widen :attr:`held_tilts` by the end of a pivot ``reached`` with usable kinematics; forget
+        them where the kinematics are unusable (the object may lie on another vertex since)."""
+        if not kinematics_usable(estimate):
+            self.held_tilts = NO_TILTS
+        elif step.kind == "pivot" and status == "reached":
+            low, high = self.held_tilts
+            self.held_tilts = (min(low, estimate.theta_o), max(high, estimate.theta_o))
+
     def _update_origin(self, estimate: Estimate) -> None:
         """The start's ground contact, as well as it is known now: the latest usable estimate while
         the ground has neither been commanded to slide nor seen moving (its ``ground_anchor``
@@ -434,7 +447,7 @@ class _StepTracker:
         ``hand_angle`` (rad), recorded ``skipped`` where it does not run); None at the end of the
         schedule."""
         if self.goal is not None:
-            answer = self.goal.next(now, estimate, self.s_g_origin, last, self.roll_tilt)
+            answer = self.goal.next(now, estimate, self.s_g_origin, last, self.roll_tilt, self.held_tilts)
             if isinstance(answer, Step):
                 return answer
             self.goal_results.append(answer)
@@ -608,6 +621,8 @@ def plant_controls(params: ControllerParams, plant: Plant) -> ControllerParams:
     )
 
 
+NO_TILTS = (math.inf, -math.inf)
+"""An empty range of tilts (:attr:`_StepTracker.held_tilts`)."""
 ROLL_RELEASE = 0.02
 """N·m: a pivot's target, held from the first sample its torque row is tight (within ``pivot_margin``,
 :attr:`_StepTracker.rolling`), holds until the row's margin exceeds ``pivot_margin`` by this much.

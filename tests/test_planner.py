@@ -358,6 +358,31 @@ def test_a_rolled_pivot_limits_the_tilt_short_of_where_the_roll_began() -> None:
         assert tilt_limit(deg(-18.3), roll, -1) == deg(-18.3)
 
 
+def test_a_pivot_that_rolled_before_turning_where_the_object_has_stood_beyond_sets_no_limit() -> None:
+    """A pivot down from 16.9° that ends ``rolled``: where it rolled before turning the object and
+    pivots had held the object at 9.9° (beyond the 16.9° limit it would set), the reach stays open;
+    held only to 16.5° (within a pivot's tolerance), or rolled after turning to 12.4°, the limit is
+    :func:`tilt_limit`'s; every later goal's planning reads the shared limits."""
+    from tests.test_targets import OBJECT, S_H, known_estimate
+
+    deg = math.radians
+    aim = TargetGoal(force_limits=(3.0, 25.0), nominal_force=8.0, margin=1.0)
+
+    def limits_after(roll_tilt: float, held: tuple[float, float]) -> dict[int, float]:
+        limits: dict[int, float] = {}
+        sequencer = GoalSequencer(0, reach(2.8), 0.0, HAND_ANGLE_RANGE, aim, tilt_limits=limits)
+        first = sequencer.next(0.0, known_estimate(OBJECT, deg(16.9), S_H), 0.0)
+        assert first.kind == "pivot" and first.delta < 0.0
+        sequencer.next(1.0, known_estimate(OBJECT, deg(16.9), S_H), 0.0, "rolled", roll_tilt, held)
+        return limits
+
+    assert limits_after(deg(16.9), (deg(9.9), deg(24.0))) == {}
+    assert limits_after(math.nan, (deg(9.9), deg(24.0))) == {}
+    assert limits_after(deg(16.9), (deg(16.5), deg(24.0))) == {-1: tilt_limit(deg(16.9), deg(16.9), -1)}
+    assert limits_after(deg(12.4), (deg(9.9), deg(24.0))) == {-1: tilt_limit(deg(16.9), deg(12.4), -1)}
+    assert limits_after(deg(16.9), (math.inf, -math.inf)) == {-1: deg(16.9)}
+
+
 def test_an_exploration_pivot_past_a_tilt_limit_turns_the_other_way() -> None:
     """Exploring at −19° with the tilt limited at −20°: a pivot that would end below −20.7° goes up
     instead; the others run as the exploration has them."""

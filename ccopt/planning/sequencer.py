@@ -187,10 +187,13 @@ class GoalSequencer:
         s_g_origin: float | None,
         last_status: str | None = None,
         roll_tilt: float | None = None,
+        held_tilts: tuple[float, float] | None = None,
     ) -> Step | GoalResult:
         """The next motion, or how the goal ended; ``last_status`` is how the previous motion of this
         goal ended (None at the start), ``roll_tilt`` the estimated ``θ_o`` (rad) where a pivot that
-        ended ``rolled`` was first seen rolling (None: unknown)."""
+        ended ``rolled`` was first seen rolling (None: unknown), ``held_tilts`` the range of
+        estimated ``θ_o`` (rad) at which pivots left the object on the vertex it is on now (None:
+        unknown; :meth:`_rolled`)."""
         self.misses = 0 if last_status in (None, "reached") else self.misses + 1
         if self._last is not None and last_status not in (None, "reached"):
             step, tilt = self._last
@@ -200,7 +203,7 @@ class GoalSequencer:
             if step.kind == "slide_hand" and last_status in HELD:
                 self.failed_hand_slides.setdefault(way, []).append(tilt)
             if step.kind == "pivot" and last_status == "rolled":
-                self.tilt_limits[way] = tilt_limit(tilt, roll_tilt, way)
+                self._rolled(tilt, roll_tilt, way, held_tilts)
         if now - self.start_time >= self.goal.timeout:
             return self.end(now, "timeout", f"the goal's {self.goal.timeout:g} s ran out")
         if self.misses >= self.max_misses:
@@ -270,6 +273,30 @@ class GoalSequencer:
             return plan
         return Plan(bolder.status, bolder.motion, bolder.reason, bolder.path, explores=True)
 
+    def _rolled(
+        self, begin: float, roll_tilt: float | None, way: int, held: tuple[float, float] | None
+    ) -> None:
+        """Limit the tilt ``way`` after a pivot that began at ``begin`` (rad) ended ``rolled``
+        (:func:`tilt_limit`, :attr:`tilt_limits`), unless the pivot rolled before it turned the
+        object (``roll_tilt`` within a pivot's tolerance of ``begin``) where pivots had left the
+        object beyond that limit by more than a pivot's tolerance (``held``): the object does not
+        tip where it has already stood, and the roll came from the torque the previous motion left
+        at the hand's limit. A random triangle's exploration had pivoted it to 9.9° and back; its
+        hand-slide probe then rolled the hand 0.8° on the face's end, the first goal's pivot down
+        from 16.9° began with its torque row tight and ended ``rolled`` with the object still, and
+        the limit there cut the reach to [17°, 75°] for the rest of the run (goals-study seed 1,
+        trial 38: three goals below 17° reported unreachable, the oracle reaching them). A pivot
+        that turned the object before it rolled sets its limit whatever was held: another random
+        triangle's exploration pivot had laid it on its face at 10.2°, and a goal's pivot from
+        17.2° that rolled at 12.4°, onto that face, then rolled twice more where the limit was
+        skipped."""
+        limit = tilt_limit(begin, roll_tilt, way)
+        still = roll_tilt is None or not abs(roll_tilt - begin) > PIVOT_TOLERANCE  # NaN: unknown
+        edge = None if held is None else (held[0] if way < 0 else held[1])
+        if still and edge is not None and way * edge > way * limit + PIVOT_TOLERANCE:
+            return
+        self.tilt_limits[way] = limit
+
     def _failed_slide(self, tilt: float, way: int, status: str, estimate: Estimate) -> None:
         """Record a ground slide towards ``way`` that began at ``tilt`` (rad) and ended ``status``
         as failed (:attr:`failed_slides`: :func:`~ccopt.planning.planner.next_motion` seeks the next
@@ -285,7 +312,7 @@ class GoalSequencer:
         sought past the band's far edge, where the pose tells the two slides apart: on the goals
         study (seed 1) the ground slides towards ``−s_g`` of three random objects were lost at
         9.6°, 2° and −5° in turn, an exploration after each, until the goal failed."""
-        band = self.split_tilt + float(DEFAULT_TOLERANCE["pivot"])
+        band = self.split_tilt + PIVOT_TOLERANCE
         if status != "lost" or not estimate.hand_slid or abs(tilt) > band:
             self.failed_slides[way] = tilt
             return
@@ -374,10 +401,12 @@ def _ways(tilts: dict[int, list[float]], coordinate: str) -> str:
     )
 
 
+PIVOT_TOLERANCE = float(DEFAULT_TOLERANCE["pivot"])
+"""rad: within this of its target a pivot ends (:data:`ccopt.schedule.DEFAULT_TOLERANCE`)."""
 TIPPING_CLEARANCE = math.radians(1.0)
 """rad: how far short of a tipping point a plan keeps the object (the experimenter's oracle, of the
 true one: :func:`ccopt.experiment.oracle_frame`)."""
-ROLL_BACKOFF = TIPPING_CLEARANCE + float(DEFAULT_TOLERANCE["pivot"])
+ROLL_BACKOFF = TIPPING_CLEARANCE + PIVOT_TOLERANCE
 """rad: a pivot that rolled the hand limits the tilt that way this far short of where the roll was
 first seen: :data:`TIPPING_CLEARANCE` and a pivot's tolerance, so that a pivot that ends within its
 tolerance of the limit stays that clearance short. The roll is seen once the object has landed and
