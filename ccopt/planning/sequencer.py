@@ -138,7 +138,7 @@ class GoalSequencer:
     """
 
     max_misses = 3
-    max_explorations = 2
+    max_explorations = 3
     max_hand_slide_failures = 3
     lost_slide_tries = 2
     hand_slide_tries_per_tilt = 2
@@ -311,7 +311,10 @@ class GoalSequencer:
         the ground 9.4 mm). After :attr:`lost_slide_tries` such slides that way, the next is
         sought past the band's far edge, where the pose tells the two slides apart: on the goals
         study (seed 1) the ground slides towards ``−s_g`` of three random objects were lost at
-        9.6°, 2° and −5° in turn, an exploration after each, until the goal failed."""
+        9.6°, 2° and −5° in turn, an exploration after each, until the goal failed. Each lost
+        slide costs an exploration, so a goal has :attr:`max_explorations` (3) of them: with 2, the
+        slide past the band had none left after the two losses and another triangle's goal still
+        failed (seed 1, trial 27; reached with 3)."""
         band = self.split_tilt + PIVOT_TOLERANCE
         if status != "lost" or not estimate.hand_slid or abs(tilt) > band:
             self.failed_slides[way] = tilt
