@@ -362,8 +362,9 @@ def test_a_rolled_pivot_limits_the_tilt_short_of_where_the_roll_began() -> None:
 def test_a_pivot_that_rolled_before_turning_where_the_object_has_stood_beyond_sets_no_limit() -> None:
     """A pivot down from 16.9° that ends ``rolled``: where it rolled before turning the object and
     pivots had held the object at 9.9° (beyond the 16.9° limit it would set), the reach stays open;
-    held only to 16.5° (within a pivot's tolerance), or rolled after turning to 12.4°, the limit is
-    :func:`tilt_limit`'s; every later goal's planning reads the shared limits."""
+    held only to 16.5° (within a pivot's tolerance), the limit is the pivot's start; rolled after
+    turning to 12.4°, a degree and a pivot's tolerance short of there. The closed-loop case is
+    ``tests/test_goal_recovery.py``."""
     from tests.test_targets import OBJECT, S_H, known_estimate
 
     deg = math.radians
@@ -379,8 +380,9 @@ def test_a_pivot_that_rolled_before_turning_where_the_object_has_stood_beyond_se
 
     assert limits_after(deg(16.9), (deg(9.9), deg(24.0))) == {}
     assert limits_after(math.nan, (deg(9.9), deg(24.0))) == {}
-    assert limits_after(deg(16.9), (deg(16.5), deg(24.0))) == {-1: tilt_limit(deg(16.9), deg(16.9), -1)}
-    assert limits_after(deg(12.4), (deg(9.9), deg(24.0))) == {-1: tilt_limit(deg(16.9), deg(12.4), -1)}
+    assert limits_after(deg(16.9), (deg(16.5), deg(24.0))) == {-1: deg(16.9)}  # never short of the start
+    rolled_on = limits_after(deg(12.4), (deg(9.9), deg(24.0)))  # a degree and a tolerance short: 14.1°
+    assert rolled_on.keys() == {-1} and math.isclose(rolled_on[-1], deg(14.1))
     assert limits_after(deg(16.9), (math.inf, -math.inf)) == {-1: deg(16.9)}
 
 

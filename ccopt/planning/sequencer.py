@@ -351,16 +351,16 @@ class GoalSequencer:
     def _failures(self) -> str:
         """The failed hand slides and the ground slides lost where the pose cannot tell them from a
         hand slide, for an ``unreachable`` reason ("" if none)."""
-        tried = [
-            f"hand slides tried and failed {_ways(self.failed_hand_slides, 's_h')}"
-            if self.failed_hand_slides else "",
-            f"ground slides lost {_ways(self.unobservable_slides, 's_g')}, where within "
-            f"{math.degrees(self.split_tilt):.1f}° of the vertical the pose cannot tell them from "
-            "a hand slide"
-            if self.unobservable_slides else "",
-        ]
-        said = "; ".join(part for part in tried if part)
-        return f" ({said})" if said else ""
+        parts = []
+        if self.failed_hand_slides:
+            parts.append(f"hand slides tried and failed {_ways(self.failed_hand_slides, 's_h')}")
+        if self.unobservable_slides:
+            parts.append(
+                f"ground slides lost {_ways(self.unobservable_slides, 's_g')}, where within "
+                f"{math.degrees(self.split_tilt):.1f}° of the vertical the pose cannot tell them from "
+                "a hand slide"
+            )
+        return f" ({'; '.join(parts)})" if parts else ""
 
     def _reach(self) -> tuple[float, float]:
         """The robot's reach, cut at the tilts where a pivot rolled the hand."""
