@@ -109,6 +109,16 @@ the centre of pressure ``c = −τ/f_n`` within ``[max(−l_h, u_low + s_h), min
 An unbounded face (``±inf``) gives :data:`hand_rows`' torque rows; a hand past the face's end has
 a patch shorter than the hand, and a hand off the face an empty one (no wrench satisfies both)."""
 
+
+
+def patch_torque_margins(f_n: float, torque: float, low: float, high: float) -> tuple[float, float]:
+    """The margins ``−N w`` (N·m) of the torque rows ``HAND_PIVOT_POS, HAND_PIVOT_NEG`` of the contact
+    patch ``[low, high]`` (m, hand positions along ``e_t``) for the hand wrench's ``f_n`` (N) and ``τ``
+    (N·m): :data:`patch_torque_rows` with the patch's ends given on the hand, in plain floats for a
+    per-sample check. Both are positive while the centre of pressure lies inside the patch."""
+    return high * f_n + torque, -low * f_n - torque
+
+
 ground_rows_world = _build_ground_rows_world()
 """``(μ_g, f_grav (2)) → (A (2×2), b (2))``: the model's ground rows ``A f_h ≤ b`` on the world hand
 force, rows ``GROUND_SLIDE_POS, GROUND_SLIDE_NEG``; ``f_grav`` is the object's weight (N, world)."""

@@ -148,3 +148,19 @@ def test_numeric_wrappers_give_each_thread_its_own_buffers():
         with ThreadPoolExecutor(4) as pool:
             for threaded, expected in zip(pool.map(cone, masses), serial, strict=True):
                 np.testing.assert_array_equal(threaded, expected)
+
+
+def test_patch_torque_margins_are_the_cut_rows_margins():
+    """The plain-float margins of a patch against :data:`ccopt.contact.patch_torque_rows` (CasADi),
+    with the patch's ends on the hand ``(u_low + s_h, u_high + s_h)`` inside the hand, and their sign
+    against the centre of pressure ``c = −τ/f_n`` lying in the patch."""
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        s_h, f_n, c = rng.uniform(-0.03, 0.03), rng.uniform(1.0, 30.0), rng.uniform(-0.05, 0.05)
+        face = np.sort(rng.uniform(-0.04, 0.04, 2) - s_h)
+        low, high = face + s_h  # inside the hand [−L_H, L_H]: the hand's own rows cut nothing
+        wrench = np.array([f_n, rng.uniform(-5.0, 5.0), -c * f_n])
+        rows = np.array(contact.patch_torque_rows(L_H, s_h, face))
+        margins = contact.patch_torque_margins(f_n, wrench[2], low, high)
+        np.testing.assert_allclose(margins, -rows @ wrench, rtol=1e-12, atol=1e-12)
+        assert (margins[0] > 0) == (c < high) and (margins[1] > 0) == (c > low)
