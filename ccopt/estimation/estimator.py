@@ -269,6 +269,7 @@ class Estimator:
         self.sliding_face = SlidingFaceFit(self.params.sliding_face)
         self.hand_slides = SlideEvidence(self.params.slid_distance)
         self._cone_input = np.zeros(12)
+        self._cone_output = np.zeros(_CONE_ROWS.function.numel_out(0))
         self._contact_force = self.params.contact_force
         self._theta_noise = self.params.theta_filter.noise
         self._split_tilt = self.params.kinematics.split_tilt
@@ -421,8 +422,7 @@ class Estimator:
             flat[7:9] = ground.b
             self._cone_ground = ground
         flat[9:12] = wrench
-        out = _CONE_ROWS.call_flat(flat)
-        out.flags.writeable = False
+        out = np.frombuffer(_CONE_ROWS.call_flat(flat, self._cone_output).tobytes())  # a read-only copy
         rows = 3 * N_CONE_ROWS
         margins = out[rows + N_CONE_ROWS :]
         return (out[:rows].reshape(N_CONE_ROWS, 3), out[rows : rows + N_CONE_ROWS], margins), margins.tolist()
