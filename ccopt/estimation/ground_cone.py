@@ -354,10 +354,8 @@ def _outside(ux: list[float], uy: list[float], h: list[float], k: int, point: tu
 
 
 def _cone(rows: list[Row2], valid: bool, up: tuple[float, float], fitted: tuple[bool, bool]) -> GroundCone:
-    (normal_pos, b_pos, _), (normal_neg, b_neg, _) = rows
-    normals, offsets = np.array((normal_pos, normal_neg)), np.array((b_pos, b_neg))
+    ((ax, ay), b_pos, _), ((cx, cy), b_neg, _) = rows
     mu_g, apex = math.nan, (math.nan, math.nan)
-    (ax, ay), (cx, cy) = normal_pos, normal_neg
     axis = math.hypot(ax + cx, ay + cy)  # of the faces' bisector, the cone's axis
     half_angle = 0.5 * math.acos(max(-1.0, min(1.0, ax * cx + ay * cy)))
     if fitted[0] and fitted[1] and axis > 0.0 and half_angle > 0.0:  # not a hull of zero width
@@ -366,19 +364,18 @@ def _cone(rows: list[Row2], valid: bool, up: tuple[float, float], fitted: tuple[
         det = ax * cy - ay * cx
         if det != 0.0:
             apex = ((cy * b_pos - ay * b_neg) / det, (ax * b_neg - cx * b_pos) / det)
-    apex_array, up_array = np.array(apex), np.array(up)
-    for array in (normals, offsets, apex_array, up_array):
-        array.flags.writeable = False
+    values = np.array((ax, ay, cx, cy, b_pos, b_neg, *apex, *up))  # A, b, apex, up: one array to make
+    values.flags.writeable = False  # read-only, and so are its views
     return validation.trusted(  # every field, each well formed by construction
         GroundCone,
         {
-            "A": normals,
-            "b": offsets,
+            "A": values[:4].reshape(2, 2),
+            "b": values[4:6],
             "valid": valid,
             "fitted": fitted,
             "mu_g": mu_g,
-            "apex": apex_array,
-            "up": up_array,
+            "apex": values[6:8],
+            "up": values[8:],
         },
     )
 
