@@ -183,7 +183,7 @@ class MujocoPlant:
         it stays within :data:`~ccopt.plant.truth.GROUND_VERTEX_HYSTERESIS` of the lowest."""
         pose = self.hand_pose()
         hand, ground = self._contact_forces()
-        hand_force = geometry.wrench_world_to_hand(float(pose[2]), (*hand, 0.0))[0]  # f_n: no torque in it
+        hand_force = geometry.world_to_hand(geometry.hand_axes(float(pose[2])), *hand)[0]  # f_n
         truth = compute_truth(
             time=self.time,
             obj=self.obj,

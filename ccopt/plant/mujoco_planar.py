@@ -189,6 +189,13 @@ class PlanarPlant(MujocoPlant):
         theta_h = self._qpos.item(self._hand_angle)
         return geometry.wrench_world_to_hand(theta_h, -self._qfrc_constraint[self._hand_dof])
 
+    def _contact_forces(self) -> tuple[tuple[float, float], tuple[float, float]]:
+        """True world forces ``(f_x, f_y)`` (N) of the hand and of the ground on the object: those of
+        :meth:`hand_wrench_world` and :meth:`ground_wrench`, without their torques."""
+        hand = (-self._qfrc_constraint[self._hand_dof]).tolist()
+        held = self._qfrc_constraint[self._obj_dof].tolist()
+        return (hand[0], hand[1]), (held[0] - hand[0], held[1] - hand[1])
+
     def ground_wrench(self) -> np.ndarray:
         """True world wrench ``(f_x, f_y, τ)`` of the ground on the object, τ about its centroid.
 

@@ -87,10 +87,29 @@ def _mode(rate: float, threshold: float) -> int:
 def point_velocity(pose: ArrayLike, velocity: ArrayLike, point: ArrayLike) -> np.ndarray:
     """World velocity of a material ``point`` of a body with ``pose`` and ``velocity`` ``(ẋ, ẏ, ω)``."""
     x, y, _ = np.asarray(pose, dtype=float).tolist()
-    vx, vy, omega = np.asarray(velocity, dtype=float).tolist()
     px, py = np.asarray(point, dtype=float).tolist()
+    return np.array(_point_velocity(x, y, np.asarray(velocity, dtype=float).tolist(), px, py))
+
+
+def _point_velocity(x: float, y: float, velocity: list[float], px: float, py: float) -> tuple[float, float]:
+    """:func:`point_velocity` of the point ``(px, py)`` of a body at ``(x, y)``, in floats."""
+    vx, vy, omega = velocity
     px, py = px - x, py - y
-    return np.array((vx - omega * py, vy + omega * px))
+    return vx - omega * py, vy + omega * px
+
+
+def ground_vertex(world_vertices: list[list[float]], previous: int | None) -> int:
+    """The ground contact's vertex of a polygon's world vertices (as lists of floats): the lowest,
+    ties to the left-most (:func:`ccopt.geometry.lowest_vertex`'s rule), or ``previous`` while it is
+    within :data:`GROUND_VERTEX_HYSTERESIS` of that one."""
+    top = min(y for _, y in world_vertices) + geometry.LOWEST_TIE
+    ties = [k for k, (_, y) in enumerate(world_vertices) if y <= top]
+    vertex = min(ties, key=lambda k: world_vertices[k][0])
+    if previous is not None and (
+        world_vertices[previous][1] <= world_vertices[vertex][1] + GROUND_VERTEX_HYSTERESIS
+    ):
+        return previous
+    return vertex
 
 
 def compute_truth(
@@ -108,24 +127,24 @@ def compute_truth(
     """Truth from the object pose/velocity (centroid, world ``(x, y, φ)``) and the hand pose/velocity
     (contact-face centre, world ``(x, y, θ)``); units m, rad, m/s, rad/s. The ground contact is the
     lowest vertex, or ``previous_vertex`` (the last one) while within :data:`GROUND_VERTEX_HYSTERESIS`
-    of it."""
-    object_pose = np.asarray(object_pose, dtype=float)
-    hand_pose = np.asarray(hand_pose, dtype=float)
+    of it. Worked out in floats (the values of the NumPy expressions of :mod:`ccopt.geometry`: a
+    record sample reads it), the vertices but through :func:`ccopt.geometry.transform_points`."""
+    object_pose = np.array(object_pose, dtype=float)
+    x, y, phi = object_pose.tolist()
+    x_h, y_h, theta_h = np.asarray(hand_pose, dtype=float).tolist()
     world_vertices = geometry.transform_points(obj.vertices, object_pose)
-    vertex = geometry.lowest_vertex(world_vertices)
-    if previous_vertex is not None and (
-        world_vertices[previous_vertex, 1] <= world_vertices[vertex, 1] + GROUND_VERTEX_HYSTERESIS
-    ):
-        vertex = previous_vertex
+    vertex = ground_vertex(world_vertices.tolist(), previous_vertex)
     r_o = world_vertices[vertex]
-    s_h, d = geometry.contact_coordinates(hand_pose, r_o)
-    theta_h = hand_pose.item(2)
-    raw = geometry.face_angle(obj.face_normal(hand_face), object_pose.item(2))
+    x_o, y_o = r_o.tolist()
+    (n_x, n_y), (t_x, t_y) = geometry.hand_axes(theta_h)
+    s_h, d = (x_o - x_h) * t_x + (y_o - y_h) * t_y, (x_o - x_h) * n_x + (y_o - y_h) * n_y
+    raw = geometry.face_angle(obj.face_normals[obj.face_index(hand_face)], phi)
     theta_o = theta_h + geometry.wrap_angle(raw - theta_h)
-    hand_velocity = np.asarray(hand_velocity, dtype=float)
-    v_contact = point_velocity(object_pose, object_velocity, hand_pose[:2])
-    hand_slip_rate = float((v_contact - hand_velocity[:2]) @ geometry.hand_tangent(theta_h))
-    ground_slip_rate = point_velocity(object_pose, object_velocity, r_o).item(0)
+    velocity = np.asarray(object_velocity, dtype=float).tolist()
+    v_x, v_y, _ = np.asarray(hand_velocity, dtype=float).tolist()
+    contact_x, contact_y = _point_velocity(x, y, velocity, x_h, y_h)
+    hand_slip_rate = (contact_x - v_x) * t_x + (contact_y - v_y) * t_y
+    ground_slip_rate = _point_velocity(x, y, velocity, x_o, y_o)[0]
     delta = theta_o - theta_h
     return validation.trusted(  # every field, each well formed by construction (a record sample's)
         Truth,
@@ -133,10 +152,10 @@ def compute_truth(
             "time": float(time),
             "theta_o": theta_o,
             "s_h": s_h,
-            "s_g": r_o.item(0),
+            "s_g": x_o,
             "d": d,
             "r_o": r_o,
-            "object_pose": object_pose.copy(),
+            "object_pose": object_pose,
             "hand_mode": _mode(hand_slip_rate, SLIDE_SPEED),
             "hand_geometry": _mode(delta, PIVOT_ANGLE),
             "ground_mode": _mode(ground_slip_rate, SLIDE_SPEED),
