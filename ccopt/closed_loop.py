@@ -16,6 +16,7 @@ the coordinate while the commanded configuration holds. The source is fixed for 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time as wallclock
 from collections.abc import Callable
@@ -274,18 +275,18 @@ def enforced_rows(estimate: Estimate) -> np.ndarray:
     """The cone rows the controller keeps (where its command keeps them): the estimated ones, but of
     the ground only those fitted to a friction face. A row at the extent of the data seen so far is
     no friction boundary: keeping it would hold the hand force where it has been and block every new
-    tilt, while the mode classifier stays conservative about it all the same."""
-    return np.logical_and(estimate.row_valid, _FITTED_ROWS[tuple(estimate.ground_fitted)])
+    tilt, while the mode classifier stays conservative about it all the same. One shared read-only
+    array per case (the controller reads one every tick)."""
+    return _enforced_rows(tuple(estimate.row_valid.tolist()), tuple(estimate.ground_fitted))
 
 
-def _fitted_rows(fitted: tuple[bool, bool]) -> np.ndarray:
-    """The rows :func:`enforced_rows` may keep where the ground rows' ``fitted`` are as given."""
-    rows = np.ones(contact.N_CONE_ROWS, dtype=bool)
-    rows[list(GROUND_ROWS)] = fitted
+@functools.cache
+def _enforced_rows(row_valid: tuple[bool, ...], fitted: tuple[bool, bool]) -> np.ndarray:
+    """:func:`enforced_rows` of the estimated rows ``row_valid`` and the ground rows' ``fitted``."""
+    rows = np.array(row_valid)
+    rows[list(GROUND_ROWS)] &= fitted
+    rows.flags.writeable = False
     return rows
-
-
-_FITTED_ROWS = {(a, b): _fitted_rows((a, b)) for a in (False, True) for b in (False, True)}
 
 
 def kinematics_usable(estimate: Estimate) -> bool:
@@ -870,8 +871,9 @@ class _Loop:
         return self._finish(wallclock.perf_counter() - start)
 
     def _advance_plant(self) -> None:
-        plant = self.plant
-        self.target += self.velocity * self.timestep
+        plant, dt = self.plant, self.timestep
+        (x, y, theta), (v_x, v_y, v_theta) = self.target.tolist(), self.velocity.tolist()
+        self.target[:] = (x + v_x * dt, y + v_y * dt, theta + v_theta * dt)  # the ramp, in floats
         plant.set_target(self.target, self.velocity)
         while self.pending and plant.time >= self.pending[0].time:
             push = self.pending.pop(0)
