@@ -185,9 +185,11 @@ class PlanarPlant(MujocoPlant):
         return -self._qfrc_constraint[self._hand_dof]
 
     def hand_wrench(self) -> np.ndarray:
-        """True hand-frame wrench ``(f_n, f_t, τ)`` of the hand on the object, τ about the face centre."""
-        theta_h = self._qpos.item(self._hand_angle)
-        return geometry.wrench_world_to_hand(theta_h, -self._qfrc_constraint[self._hand_dof])
+        """True hand-frame wrench ``(f_n, f_t, τ)`` of the hand on the object, τ about the face centre
+        (:meth:`hand_wrench_world` in the hand frame, in floats: the sensors read it every sample)."""
+        f_x, f_y, torque = self._qfrc_constraint[self._hand_dof].tolist()  # on the hand, by the object
+        axes = geometry.hand_axes(self._qpos.item(self._hand_angle))
+        return np.array((*geometry.world_to_hand(axes, -f_x, -f_y), -torque))
 
     def _contact_forces(self) -> tuple[tuple[float, float], tuple[float, float]]:
         """True world forces ``(f_x, f_y)`` (N) of the hand and of the ground on the object: those of

@@ -213,16 +213,18 @@ class Sensors:
         """The constant F/T bias of this run, hand frame ``(f_n, f_t, τ)``."""
         self._faults = [_FAULT_STAGES[fault.kind](fault) for fault in p.faults]
         self._fault_rng = np.random.default_rng(sequence.spawn(1)[0])
-        self._pose_offsets = self._wrench_offsets = np.empty((0, 3))  # of the batch's samples
-        self._dropped = np.empty(0, dtype=bool)
+        self._pose_offsets: list[list[float]] = []  # of the batch's samples, as floats
+        self._wrench_offsets: list[list[float]] = []
+        self._dropped: list[bool] = []
         self._cursor = 0
 
     def _refill(self) -> None:
-        """Draw the next :data:`BATCH` samples' noise (plus bias), dropouts and fault draws at once."""
+        """Draw the next :data:`BATCH` samples' noise (plus bias), dropouts and fault draws at once
+        (kept as floats: a read adds its sample's in floats, the values NumPy's sums would have)."""
         offsets = self._rng.standard_normal((BATCH, 6)) * self._sigma
         offsets[:, 3:] += self.bias
-        self._pose_offsets, self._wrench_offsets = offsets[:, :3], offsets[:, 3:]
-        self._dropped = self._rng.random(BATCH) < self.params.dropout_probability
+        self._pose_offsets, self._wrench_offsets = offsets[:, :3].tolist(), offsets[:, 3:].tolist()
+        self._dropped = (self._rng.random(BATCH) < self.params.dropout_probability).tolist()
         for stage in self._faults:
             stage.refill(self._fault_rng)
         self._cursor = 0
@@ -237,14 +239,14 @@ class Sensors:
             return self._read_faulty(k)
         if self._dropped[k]:
             return Measurement(self.plant.time, np.full(3, np.nan), np.full(3, np.nan))
-        pose = self.plant.hand_pose() + self._pose_offsets[k]
-        return Measurement(self.plant.time, pose, self.plant.hand_wrench() + self._wrench_offsets[k])
+        pose = _plus(self.plant.hand_pose(), self._pose_offsets[k])
+        return Measurement(self.plant.time, pose, _plus(self.plant.hand_wrench(), self._wrench_offsets[k]))
 
     def _read_faulty(self, k: int) -> Measurement:
         """:meth:`read` through the faults: sample ``k`` of the batch, the faults, then the dropouts."""
         time = self.plant.time
-        pose = self.plant.hand_pose() + self._pose_offsets[k]
-        wrench = self.plant.hand_wrench() + self._wrench_offsets[k]
+        pose = _plus(self.plant.hand_pose(), self._pose_offsets[k])
+        wrench = _plus(self.plant.hand_wrench(), self._wrench_offsets[k])
         for stage in self._faults:
             if time >= stage.start - TIME_TOLERANCE:
                 pose, wrench = stage.apply(time, k, pose, wrench)
@@ -253,6 +255,13 @@ class Sensors:
         if self._dropped[k]:
             return Measurement(time, np.full(3, np.nan), np.full(3, np.nan))
         return Measurement(time, pose, wrench)
+
+
+def _plus(values: np.ndarray, offsets: list[float]) -> np.ndarray:
+    """``values + offsets`` of three numbers, added in floats (no NumPy operation per read)."""
+    a, b, c = values.tolist()
+    d, e, f = offsets
+    return np.array((a + d, b + e, c + f))
 
 
 class _FaultStage:
