@@ -47,7 +47,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ccopt import contact, modes, statics
+from ccopt import contact, modes, statics, validation
 from ccopt.contact import GROUND_ROWS
 from ccopt.estimation.estimator import Estimate
 from ccopt.modes import REMOVED_ROWS, Motion, kept_contacts
@@ -202,10 +202,16 @@ def statics_target(
     if estimate.hand_slid or not kept_contacts(motion)[0]:
         return target  # measured where the hand slid; a hand slide slides at it: nothing to explore
     mu_h = estimate.mu_h + goal.friction_step
-    bolder = _target(dataclasses.replace(known, mu_h=mu_h), estimate, hand_angle, motion, goal)
+    bolder = _target(_with_hand_friction(known, mu_h), estimate, hand_angle, motion, goal)
     if bolder.judged and bolder.margin > target.margin:
         return StaticsTarget(bolder.force, bolder.tangential, bolder.margin, mu_h)
     return target
+
+
+def _with_hand_friction(known: statics.ObjectStatics, mu_h: float) -> statics.ObjectStatics:
+    """``known`` with the hand friction ``mu_h`` (finite, non-negative): its other fields checked
+    already, made without its ``__init__`` (``dataclasses.replace`` would check and copy them again)."""
+    return validation.trusted(statics.ObjectStatics, {**vars(known), "mu_h": mu_h})
 
 
 def _margin_of(target: StaticsTarget) -> float:
