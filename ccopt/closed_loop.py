@@ -874,7 +874,7 @@ class _Loop:
         plant, dt = self.plant, self.timestep
         (x, y, theta), (v_x, v_y, v_theta) = self.target.tolist(), self.velocity.tolist()
         self.target[:] = (x + v_x * dt, y + v_y * dt, theta + v_theta * dt)  # the ramp, in floats
-        plant.set_target(self.target, self.velocity)
+        plant.set_target(self.target, self.velocity, check=False)  # finite (Controller.update's steps are)
         while self.pending and plant.time >= self.pending[0].time:
             push = self.pending.pop(0)
             plant.push_object(push.force, push.duration)

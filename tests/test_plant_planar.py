@@ -296,6 +296,10 @@ def test_planar_plant_implements_the_plant_protocol() -> None:
     assert plant.time == pytest.approx(0.01)
     plant.set_target([0.1, 0.2, 0.3], [0.0, 0.0, 0.1])
     np.testing.assert_array_equal(plant.target(), [0.1, 0.2, 0.3])
+    checked = plant.data.ctrl.copy()
+    plant.set_target(np.zeros(3))
+    plant.set_target(np.array([0.1, 0.2, 0.3]), np.array([0.0, 0.0, 0.1]), check=False)  # the loop's
+    np.testing.assert_array_equal(plant.data.ctrl, checked)
 
 
 @pytest.mark.parametrize(

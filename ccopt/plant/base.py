@@ -160,8 +160,10 @@ class Plant(Protocol):
     when the hand is seen rolling, and the hand rolls against the object by what it lagged and ran
     on. The loop caps the controller's angular speed at this rate."""
 
-    def set_target(self, pose: ArrayLike, velocity: ArrayLike | None = None) -> None:
-        """Hand impedance target, world ``(x, y, θ)`` (m, rad), with optional velocity feed-forward."""
+    def set_target(self, pose: ArrayLike, velocity: ArrayLike | None = None, *, check: bool = True) -> None:
+        """Hand impedance target, world ``(x, y, θ)`` (m, rad), with optional velocity feed-forward.
+        ``ValueError`` unless each is 3 finite numbers; ``check=False`` skips the check (a caller
+        whose values are so by construction: the closed loop's every step)."""
 
     def target(self) -> np.ndarray:
         """Current impedance target, world ``(x, y, θ)``."""

@@ -291,9 +291,10 @@ class PandaPlant(MujocoPlant):
 
     # --- commands --------------------------------------------------------------------------------
 
-    def set_target(self, pose: ArrayLike, velocity: ArrayLike | None = None) -> None:
-        """Hand impedance target, world ``(x, y, θ)`` (m, rad), and its velocity (m/s, rad/s)."""
-        target = planar_vector("target pose", pose)
+    def set_target(self, pose: ArrayLike, velocity: ArrayLike | None = None, *, check: bool = True) -> None:
+        """Hand impedance target, world ``(x, y, θ)`` (m, rad), and its velocity (m/s, rad/s);
+        ``check=False`` takes them as 3 finite numbers each without checking."""
+        target = planar_vector("target pose", pose) if check else np.asarray(pose, dtype=float)
         x, y, theta = target.tolist()
         if theta != self._target_angle:
             self._target_rotation[:] = hand_rotation(theta)
@@ -304,7 +305,7 @@ class PandaPlant(MujocoPlant):
         if velocity is None:
             self._target_twist[:] = 0.0
         else:
-            twist = planar_vector("target velocity", velocity)
+            twist = planar_vector("target velocity", velocity) if check else np.asarray(velocity, dtype=float)
             np.dot(self._planar_to_spatial, twist, out=self._target_twist)
 
     def target(self) -> np.ndarray:

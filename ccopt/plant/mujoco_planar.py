@@ -153,10 +153,14 @@ class PlanarPlant(MujocoPlant):
 
     # --- commands --------------------------------------------------------------------------------
 
-    def set_target(self, pose: ArrayLike, velocity: ArrayLike | None = None) -> None:
-        """Hand impedance target, world ``(x, y, θ)`` (m, rad), and its velocity (m/s, rad/s)."""
-        self._ctrl[:3] = planar_vector("target pose", pose)
-        self._ctrl[3:] = 0.0 if velocity is None else planar_vector("target velocity", velocity)
+    def set_target(self, pose: ArrayLike, velocity: ArrayLike | None = None, *, check: bool = True) -> None:
+        """Hand impedance target, world ``(x, y, θ)`` (m, rad), and its velocity (m/s, rad/s);
+        ``check=False`` takes them as 3 finite numbers each without checking."""
+        if check:
+            pose = planar_vector("target pose", pose)
+            velocity = None if velocity is None else planar_vector("target velocity", velocity)
+        self._ctrl[:3] = pose
+        self._ctrl[3:] = 0.0 if velocity is None else velocity
 
     def target(self) -> np.ndarray:
         """Current impedance target, world ``(x, y, θ)``."""
