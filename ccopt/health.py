@@ -152,8 +152,8 @@ class SensorHealth:
         self._previous = (math.nan, math.nan, math.nan)
         self._repeats = 0  # samples in a row equal to the previous one, this one included
         self._filter_time = math.nan  # time of the last filtered sample
-        self._error = [0.0, 0.0]  # filtered x_tar − x_h (world x, y), m
-        self._force = [0.0, 0.0]  # filtered measured world force, N
+        self._error = (0.0, 0.0)  # filtered x_tar − x_h (world x, y), m
+        self._force = (0.0, 0.0)  # filtered measured world force, N
         self._over_since = math.nan  # start of the current disagreement
 
     def update(self, time: float, hand_pose: ArrayLike, hand_wrench: ArrayLike, target: ArrayLike) -> Health:
@@ -217,14 +217,19 @@ class SensorHealth:
         gain = -math.expm1(-step / params.filter_time) if step > 0.0 else 1.0  # restart if time went back
         lag = step * (1.0 - gain) / gain if gain < 1.0 else math.inf  # of a ramp, s (→ T as step → 0)
         self._filter_time = time
-        filtered, measured = self._error, self._force
-        predicted = [0.0, 0.0]
-        for axis in (0, 1):
-            filtered[axis] += gain * (error[axis] - filtered[axis])
-            measured[axis] += gain * (force[axis] - measured[axis])
-            rate = (error[axis] - filtered[axis]) / lag
-            predicted[axis] = params.stiffness[axis] * filtered[axis] + params.damping[axis] * rate
-        self.residual = math.hypot(measured[0] - predicted[0], measured[1] - predicted[1])
+        (error_x, error_y), (force_x, force_y) = error, force
+        (filtered_x, filtered_y), (measured_x, measured_y) = self._error, self._force
+        filtered_x += gain * (error_x - filtered_x)  # per axis, written out: every sample
+        filtered_y += gain * (error_y - filtered_y)
+        measured_x += gain * (force_x - measured_x)
+        measured_y += gain * (force_y - measured_y)
+        (k_x, k_y, _), (d_x, d_y, _) = params.stiffness, params.damping
+        predicted = (
+            k_x * filtered_x + d_x * ((error_x - filtered_x) / lag),
+            k_y * filtered_y + d_y * ((error_y - filtered_y) / lag),
+        )
+        self._error, self._force = (filtered_x, filtered_y), (measured_x, measured_y)
+        self.residual = math.hypot(measured_x - predicted[0], measured_y - predicted[1])
         tolerance = params.force_tolerance + params.force_ratio * math.hypot(*predicted)
         if self.residual <= tolerance:
             self._over_since = math.nan
@@ -236,7 +241,7 @@ class SensorHealth:
             self._fault(
                 "dead" if dead else "implausible",
                 time,
-                f"measured force ({measured[0]:.1f}, {measured[1]:.1f}) N differs from the impedance force "
+                f"measured force ({measured_x:.1f}, {measured_y:.1f}) N differs from the impedance force "
                 f"({predicted[0]:.1f}, {predicted[1]:.1f}) N by {self.residual:.1f} N for "
                 f"{1e3 * (time - self._over_since):.0f} ms (tolerance {tolerance:.1f} N)",
             )
