@@ -98,16 +98,16 @@ def _point_velocity(x: float, y: float, velocity: list[float], px: float, py: fl
     return vx - omega * py, vy + omega * px
 
 
-def ground_vertex(world_vertices: list[list[float]], previous: int | None) -> int:
-    """The ground contact's vertex of a polygon's world vertices (as lists of floats): the lowest,
-    ties to the left-most (:func:`ccopt.geometry.lowest_vertex`'s rule), or ``previous`` while it is
-    within :data:`GROUND_VERTEX_HYSTERESIS` of that one."""
-    top = min(y for _, y in world_vertices) + geometry.LOWEST_TIE
-    ties = [k for k, (_, y) in enumerate(world_vertices) if y <= top]
-    vertex = min(ties, key=lambda k: world_vertices[k][0])
-    if previous is not None and (
-        world_vertices[previous][1] <= world_vertices[vertex][1] + GROUND_VERTEX_HYSTERESIS
-    ):
+def ground_vertex(xs: list[float], ys: list[float], previous: int | None) -> int:
+    """The ground contact's vertex of a polygon whose world vertices are at ``(xs[k], ys[k])`` (m):
+    the lowest, ties to the left-most (:func:`ccopt.geometry.lowest_vertex`'s rule, in floats), or
+    ``previous`` while it is within :data:`GROUND_VERTEX_HYSTERESIS` of that one."""
+    top = min(ys) + geometry.LOWEST_TIE
+    vertex = -1
+    for k, (x, y) in enumerate(zip(xs, ys, strict=True)):
+        if y <= top and (vertex < 0 or x < xs[vertex]):
+            vertex = k
+    if previous is not None and ys[previous] <= ys[vertex] + GROUND_VERTEX_HYSTERESIS:
         return previous
     return vertex
 
@@ -133,9 +133,9 @@ def compute_truth(
     x, y, phi = object_pose.tolist()
     x_h, y_h, theta_h = np.asarray(hand_pose, dtype=float).tolist()
     world_vertices = geometry.transform_points(obj.vertices, object_pose)
-    vertex = ground_vertex(world_vertices.tolist(), previous_vertex)
-    r_o = world_vertices[vertex]
-    x_o, y_o = r_o.tolist()
+    xs, ys = world_vertices.T.tolist()
+    vertex = ground_vertex(xs, ys, previous_vertex)
+    r_o, x_o, y_o = world_vertices[vertex], xs[vertex], ys[vertex]
     (n_x, n_y), (t_x, t_y) = geometry.hand_axes(theta_h)
     s_h, d = (x_o - x_h) * t_x + (y_o - y_h) * t_y, (x_o - x_h) * n_x + (y_o - y_h) * n_y
     raw = geometry.face_angle(obj.face_normals[obj.face_index(hand_face)], phi)
