@@ -245,15 +245,6 @@ ROUGH_LEVER_STD = 0.01
 once both standard deviations are at most this (:func:`rough_lever`)."""
 
 
-def target_velocity(theta_h: float, step: np.ndarray, period: float) -> np.ndarray:
-    """The world velocity ``(ẋ, ẏ, θ̇)`` (m/s, rad/s) that ramps the impedance target by the
-    controller's hand-frame ``step`` ``(Δn, Δt, Δθ)`` (m, rad) over one control ``period`` (s) at the
-    hand angle ``theta_h`` (rad): :func:`~ccopt.geometry.twist_hand_to_world` over the period, in floats."""
-    dn, dt, dtheta = step.tolist()
-    dx, dy = geometry.hand_to_world(geometry.hand_axes(theta_h), dn, dt)
-    return np.array((dx / period, dy / period, dtheta / period))
-
-
 def rough_lever(estimate: Estimate) -> tuple[float, float]:
     """``(s_h, d)`` (m) for the controller's ``v_θ`` before the kinematics are valid: their rough
     means where both are known to :data:`ROUGH_LEVER_STD` and the hand is known to be off the
@@ -299,7 +290,7 @@ def kinematics_usable(estimate: Estimate) -> bool:
 def hand_proxy(hand_pose: np.ndarray) -> np.ndarray:
     """Coordinates that change like ``(θ_o, s_h, s_g)`` while the commanded configuration holds."""
     x_h, y_h, theta_h = np.asarray(hand_pose, dtype=float).tolist()
-    along = x_h * math.cos(theta_h) + y_h * math.sin(theta_h)  # r_h·e_t, in floats: the loop's every tick
+    along = geometry.world_to_hand(geometry.hand_axes(theta_h), x_h, y_h)[1]  # r_h·e_t
     return np.array((theta_h, -along, x_h))
 
 
@@ -933,7 +924,8 @@ class _Loop:
         tracker.fresh = False
         output = self.controller.update(control_input(estimate, hand_pose, coordinates, aim), tracker.command)
         self.last_solution = (output.solution.slack, output.solution.feasible)
-        self.velocity = target_velocity(float(hand_pose[2]), output.step, self.controller.period)
+        step = geometry.twist_hand_to_world(float(hand_pose[2]), output.step)
+        self.velocity = step / self.controller.period
         self._check_solved(not output.solved)
         if self.on_tick is not None:
             self.on_tick(self.now, tracker.index, len(self.schedule.steps))

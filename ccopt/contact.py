@@ -110,7 +110,6 @@ An unbounded face (``±inf``) gives :data:`hand_rows`' torque rows; a hand past 
 a patch shorter than the hand, and a hand off the face an empty one (no wrench satisfies both)."""
 
 
-
 def patch_torque_margins(f_n: float, torque: float, low: float, high: float) -> tuple[float, float]:
     """The margins ``−N w`` (N·m) of the torque rows ``HAND_PIVOT_POS, HAND_PIVOT_NEG`` of the contact
     patch ``[low, high]`` (m, hand positions along ``e_t``) for the hand wrench's ``f_n`` (N) and ``τ``

@@ -298,11 +298,21 @@ LOWEST_TIE = 1e-4
 
 def lowest_vertex(world_vertices: ArrayLike) -> int:
     """Index of the ground-contact vertex of a polygon in world coordinates: the lowest, ties
-    (:data:`LOWEST_TIE`) to the left-most."""
-    vertices = np.asarray(world_vertices, dtype=float)
-    heights = vertices[:, 1]
-    candidates = np.flatnonzero(heights <= heights.min() + LOWEST_TIE)
-    return int(candidates[np.argmin(vertices[candidates, 0])])
+    (:data:`LOWEST_TIE`) to the left-most (:func:`lowest_of`)."""
+    xs, ys = np.asarray(world_vertices, dtype=float).T.tolist()
+    return lowest_of(xs, ys)
+
+
+def lowest_of(xs: list[float], ys: list[float]) -> int:
+    """:func:`lowest_vertex` of the vertices ``(xs[k], ys[k])`` (m), in floats: the first of the
+    left-most among those within :data:`LOWEST_TIE` of the lowest (the ground truth reads it every
+    record sample)."""
+    top = min(ys) + LOWEST_TIE
+    vertex = -1
+    for k, (x, y) in enumerate(zip(xs, ys, strict=True)):
+        if y <= top and (vertex < 0 or x < xs[vertex]):
+            vertex = k
+    return vertex
 
 
 def transform_points(points: ArrayLike, pose: ArrayLike) -> Array:

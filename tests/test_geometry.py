@@ -96,3 +96,18 @@ def test_bad_polygons_raise():
         geometry.as_polygon([[0, 0], [1, 0]])
     with pytest.raises(ValueError, match="finite"):
         geometry.as_polygon([[0, 0], [1, np.nan], [0, 1]])
+
+
+def test_lowest_vertex_is_the_left_most_of_those_within_the_tie_of_the_lowest():
+    """Against the rule written out on each polygon: random ones, with vertices moved onto the
+    lowest's height, within the tie of it and just beyond it."""
+    rng = np.random.default_rng(8)
+    for _ in range(500):
+        vertices = rng.uniform(-0.1, 0.1, (int(rng.integers(3, 9)), 2))
+        low = vertices[:, 1].min()
+        for k in rng.choice(len(vertices), 2, replace=False):
+            vertices[k, 1] = low + rng.choice((0.0, 0.5, 2.0)) * geometry.LOWEST_TIE
+        ties = [k for k, (_, y) in enumerate(vertices) if y <= vertices[:, 1].min() + geometry.LOWEST_TIE]
+        expected = min(ties, key=lambda k: (vertices[k, 0], k))
+        assert geometry.lowest_vertex(vertices) == expected
+        assert geometry.lowest_of(*vertices.T.tolist()) == expected

@@ -100,13 +100,9 @@ def _point_velocity(x: float, y: float, velocity: list[float], px: float, py: fl
 
 def ground_vertex(xs: list[float], ys: list[float], previous: int | None) -> int:
     """The ground contact's vertex of a polygon whose world vertices are at ``(xs[k], ys[k])`` (m):
-    the lowest, ties to the left-most (:func:`ccopt.geometry.lowest_vertex`'s rule, in floats), or
-    ``previous`` while it is within :data:`GROUND_VERTEX_HYSTERESIS` of that one."""
-    top = min(ys) + geometry.LOWEST_TIE
-    vertex = -1
-    for k, (x, y) in enumerate(zip(xs, ys, strict=True)):
-        if y <= top and (vertex < 0 or x < xs[vertex]):
-            vertex = k
+    the lowest (:func:`ccopt.geometry.lowest_of`), or ``previous`` while it is within
+    :data:`GROUND_VERTEX_HYSTERESIS` of that one."""
+    vertex = geometry.lowest_of(xs, ys)
     if previous is not None and ys[previous] <= ys[vertex] + GROUND_VERTEX_HYSTERESIS:
         return previous
     return vertex
@@ -136,14 +132,14 @@ def compute_truth(
     xs, ys = world_vertices.T.tolist()
     vertex = ground_vertex(xs, ys, previous_vertex)
     r_o, x_o, y_o = world_vertices[vertex], xs[vertex], ys[vertex]
-    (n_x, n_y), (t_x, t_y) = geometry.hand_axes(theta_h)
-    s_h, d = (x_o - x_h) * t_x + (y_o - y_h) * t_y, (x_o - x_h) * n_x + (y_o - y_h) * n_y
+    axes = geometry.hand_axes(theta_h)
+    d, s_h = geometry.world_to_hand(axes, x_o - x_h, y_o - y_h)  # geometry.contact_coordinates
     raw = geometry.face_angle(obj.face_normals[obj.face_index(hand_face)], phi)
     theta_o = theta_h + geometry.wrap_angle(raw - theta_h)
     velocity = np.asarray(object_velocity, dtype=float).tolist()
     v_x, v_y, _ = np.asarray(hand_velocity, dtype=float).tolist()
     contact_x, contact_y = _point_velocity(x, y, velocity, x_h, y_h)
-    hand_slip_rate = (contact_x - v_x) * t_x + (contact_y - v_y) * t_y
+    hand_slip_rate = geometry.world_to_hand(axes, contact_x - v_x, contact_y - v_y)[1]
     ground_slip_rate = _point_velocity(x, y, velocity, x_o, y_o)[0]
     delta = theta_o - theta_h
     return validation.trusted(  # every field, each well formed by construction (a record sample's)
