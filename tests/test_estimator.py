@@ -271,3 +271,18 @@ def test_a_sticking_command_lets_the_kinematics_converge_through_conservative_ha
     assert not without.kinematics_valid
     assert np.all(np.isfinite(without.kinematics_mean))  # rough, for a controller
     assert max(without.kinematics_std[1:]) > max(with_command.kinematics_std[1:])
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "error"),
+    [
+        ("moment_mismatch_tilt", 0.0, ValueError),
+        ("moment_mismatch_tilt", math.nan, ValueError),
+        ("moment_mismatch_tilt", True, TypeError),
+        ("moment_mismatch_samples", 0, ValueError),
+        ("moment_mismatch_samples", 2.5, TypeError),
+    ],
+)
+def test_the_moment_checks_parameters_are_refused_naming_the_field(field, value, error):
+    with pytest.raises(error, match=field):
+        EstimatorParams(**{field: value})

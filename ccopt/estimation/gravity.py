@@ -154,6 +154,9 @@ class GravityEstimator:
     def __init__(self, params: GravityParams | None = None) -> None:
         self.params = params if params is not None else GravityParams()
         self._epoch = (0, 0)  # the kinematics' (resets, anchor) of the current segment
+        self.agreed: bool | None = None
+        """Whether the last sample's moment about the known ground contact agreed with ``M̂``
+        (:meth:`_consistent`); None where it was not judged (no sample, or the contact unknown)."""
         self._contact: _GroundContact = (0.0,) * 5  # its last ground contact estimate
         self.reset()
 
@@ -180,9 +183,12 @@ class GravityEstimator:
             self.end_segment(self._contact)
         self._epoch, self._contact = epoch, contact
         known = math.isfinite(kinematics.rough[1]) and math.isfinite(kinematics.rough[2])  # r_o
+        self.agreed = None
         if kinematics.ground_fixed and math.isfinite(theta_o):
             sample = _moment_sample(theta_o, hand_pose, hand_wrench, force_world)
-            if not known or self._consistent(sample, hand_pose, contact):
+            if known:
+                self.agreed = self._consistent(sample, hand_pose, contact)
+            if not known or self.agreed:
                 self._accumulate(*sample)
         return self.estimate(theta_o, contact if known else None, kinematics.contact_valid)
 
