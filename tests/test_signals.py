@@ -38,9 +38,19 @@ def finish(process):
 
 
 def python(script, *args, timeout=60):
-    """Run ``script`` in a fresh Python process with ``args``; its completed process."""
+    """Run ``script`` in a fresh Python process with ``args``; its completed process.
+
+    The process starts with Ctrl-C's default disposition, so that Python sets its own handler, as
+    in a terminal: a test runner started in the background (a non-interactive shell's ``&``) ignores
+    SIGINT, its children inherit that, and Python then leaves it ignored."""
     command = [sys.executable, "-c", script, *args]
-    return subprocess.run(command, capture_output=True, text=True, timeout=timeout)
+    return subprocess.run(
+        command, capture_output=True, text=True, timeout=timeout, preexec_fn=_default_sigint
+    )
+
+
+def _default_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
 def status(out):
