@@ -281,6 +281,10 @@ def test_a_sticking_command_lets_the_kinematics_converge_through_conservative_ha
         ("moment_mismatch_tilt", True, TypeError),
         ("moment_mismatch_samples", 0, ValueError),
         ("moment_mismatch_samples", 2.5, TypeError),
+        ("hand_give", -1e-3, ValueError),
+        ("hand_give", math.inf, ValueError),
+        ("hand_give_filter", 0.0, ValueError),
+        ("hand_give_filter", "0.1", TypeError),
     ],
 )
 def test_the_moment_checks_parameters_are_refused_naming_the_field(field, value, error):
