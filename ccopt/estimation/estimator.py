@@ -22,7 +22,10 @@ m/rad) and hand wrench ``(f_n, f_t, τ)`` (hand frame, N and N·m, :mod:`ccopt.g
    constant-rate Kalman filter (:mod:`.angle_filter`), which averages the angle noise without
    lagging a pivot;
 6. the weight's moment about the ground contact, ``M(θ_o)`` (:mod:`.gravity`), from the samples the
-   kinematics regressed on a fixed ground contact;
+   kinematics regressed on a fixed ground contact; the same balance checks the kinematics: a
+   disagreement over a range of tilts (:meth:`Estimator._check_moment`), or the hand's position on
+   the face departing from theirs in a ground slide the pose cannot tell from a hand slide
+   (:meth:`Estimator._check_hand_give`), resets them;
 7. where the face under the hand is known to be (:mod:`.face`): the hand's extent at the start and
    the centres of pressure seen since.
 
