@@ -10,7 +10,14 @@ import numpy as np
 import pytest
 
 from ccopt import geometry
-from ccopt.estimation.gravity import UNKNOWN, GravityEstimate, GravityEstimator, GravityParams
+from ccopt.estimation.gravity import (
+    UNKNOWN,
+    GravityEstimate,
+    GravityEstimator,
+    GravityParams,
+    flush_hand_position,
+    flush_moment,
+)
 from ccopt.estimation.kinematics import KinematicEstimate
 from ccopt.statics import GravityMoment
 
@@ -183,3 +190,21 @@ def test_an_unknown_moment_is_nan():
 def test_bad_parameters_raise_naming_the_field(field, value, error):
     with pytest.raises(error, match=field):
         GravityParams(**{field: value})
+
+
+def test_the_flush_moment_is_the_world_moment_about_the_ground_contact_and_inverts():
+    """For random flush configurations the hand-frame form is the moment of the hand's force and
+    torque about the ground contact written out in world axes (the torque about the hand face's
+    centre plus ``(r_h − r_o) × f``, negated), and :func:`flush_hand_position` recovers ``s_h``."""
+    rng = np.random.default_rng(11)
+    for _ in range(200):
+        theta, s_h, d = rng.uniform(-1.0, 1.0), rng.uniform(-0.05, 0.05), rng.uniform(0.01, 0.15)
+        f_n, f_t, torque = rng.uniform(2.0, 25.0), rng.uniform(-8.0, 8.0), rng.uniform(-0.5, 0.5)
+        r_o = rng.uniform(-0.2, 0.2, 2)
+        pose = geometry.hand_pose_from_contact(theta, s_h, d, r_o)
+        f_x, f_y = geometry.hand_force_to_world(theta, f_n, f_t)
+        lever = pose[:2] - r_o
+        world = -(torque + lever[0] * f_y - lever[1] * f_x)
+        moment = flush_moment(f_n, f_t, torque, s_h, d)
+        assert moment == pytest.approx(world, abs=1e-12)
+        assert flush_hand_position(f_n, f_t, torque, d, moment) == pytest.approx(s_h, abs=1e-12)

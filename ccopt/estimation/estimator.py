@@ -56,7 +56,13 @@ from ccopt.estimation.classifier import ModeClassifier, ModeParams
 from ccopt.estimation.face import UNKNOWN_FACE, FaceEstimator, FaceParams
 from ccopt.estimation.friction import HandFrictionEstimator, HandFrictionParams
 from ccopt.estimation.gravity import UNKNOWN as UNKNOWN_GRAVITY
-from ccopt.estimation.gravity import GravityEstimate, GravityEstimator, GravityParams
+from ccopt.estimation.gravity import (
+    GravityEstimate,
+    GravityEstimator,
+    GravityParams,
+    flush_hand_position,
+    flush_moment,
+)
 from ccopt.estimation.ground_cone import GroundCone, GroundConeEstimator, GroundConeParams
 from ccopt.estimation.kinematics import KinematicEstimate, KinematicEstimator, KinematicsParams
 from ccopt.estimation.quantile import check_number
@@ -451,8 +457,9 @@ class Estimator:
         a hand slide along the face move the hand alike, and where the hand's friction is not yet
         measured the kinematics trust the command (:func:`either_slides`). The moment balance
         tells them apart: while the hand is flush, ``s_h = (d f_t − τ − M)/f_n``
-        (:mod:`.gravity`), and at the slide's tilt ``M`` holds still. So the moment is taken over
-        the slide's first 50 ms from the kinematics' own ``ŝ_h`` and ``d̂``, and from then on the
+        (:func:`~.gravity.flush_hand_position`), and at the slide's tilt ``M`` holds still. So the
+        moment is taken over the slide's first 50 ms from the kinematics' own ``ŝ_h`` and ``d̂``
+        (:func:`~.gravity.flush_moment`), and from then on the
         ``s_h`` that moment gives, low-pass filtered (``hand_give_filter``) over the samples whose
         hand the classifier reports flush (a hand at its torque limit flickers in and out: the
         samples between are skipped), follows the hand's true position on the face; once it
@@ -482,13 +489,13 @@ class Estimator:
             return
         d, s_h = kinematics.d, kinematics.s_h
         if give is None:
-            self._give = [time, -(torque + s_h * f_n - d * f_t), 1.0, math.nan, time]
+            self._give = [time, flush_moment(f_n, f_t, torque, s_h, d), 1.0, math.nan, time]
             return
         start, moment_sum, count, filtered, last = give
         if time - start < HAND_GIVE_SETTLE:
-            give[1], give[2], give[4] = moment_sum - (torque + s_h * f_n - d * f_t), count + 1.0, time
+            give[1], give[2], give[4] = moment_sum + flush_moment(f_n, f_t, torque, s_h, d), count + 1.0, time
             return
-        position = (d * f_t - torque - moment_sum / count) / f_n
+        position = flush_hand_position(f_n, f_t, torque, d, moment_sum / count)
         if math.isnan(filtered):
             filtered = position
         else:

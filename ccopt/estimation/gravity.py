@@ -279,6 +279,19 @@ _MomentSample = tuple[float, float, float, float, float]
 hand force (N)."""
 
 
+def flush_moment(f_n: float, f_t: float, torque: float, s_h: float, d: float) -> float:
+    """The weight's moment about the ground contact (N·m, CCW) that balances a flush hand's wrench
+    ``(f_n, f_t, τ)`` (hand frame, N and N·m) with the contact at ``(s_h, d)`` (m) from the hand:
+    ``M = −(τ + s_h f_n − d f_t)`` (the module docstring)."""
+    return -(torque + s_h * f_n - d * f_t)
+
+
+def flush_hand_position(f_n: float, f_t: float, torque: float, d: float, moment: float) -> float:
+    """``s_h`` (m) of :func:`flush_moment` solved for it: where the ground contact lies along the
+    hand for the wrench ``(f_n, f_t, τ)``, the distance ``d`` (m) and the weight's moment (N·m)."""
+    return (d * f_t - torque - moment) / f_n
+
+
 def _moment_sample(
     theta_o: float,
     hand_pose: list[float],
