@@ -22,6 +22,11 @@ and the experimenter's oracle (the planner on the true object). Goals-study obje
   goal ``s_g`` −10 mm was claimed with the object where it began. The moment balance gives the
   hand's position on the face (:meth:`ccopt.estimation.estimator.Estimator._check_hand_give`;
   seed 7).
+* **A hand's slide taken for the ground's friction.** A ground slide at 10° slid the hand 7.7 mm
+  along the face in 3 s, the ground not at all; before the kinematics were let go, ``ŝ_g`` had
+  moved, and the ground counted as seen sliding: the hand's friction limit became the ground's
+  friction face (``μ̂_g`` 0.29 against 0.69), and the goal was reported unreachable
+  (:meth:`ccopt.estimation.estimator.Estimator._drop_unfounded_slide`; seed 6).
 * **A roll over the face's end, unseen.** A sliver's ground slides with the hand 9 mm past the
   ground contact moved the centre of pressure to the face's end, well inside the hand, and the
   object turned 17° under the hand with the hand's torque rows far from tight
@@ -36,7 +41,7 @@ import numpy as np
 import pytest
 
 from ccopt.closed_loop import LoopParams
-from ccopt.estimation.estimator import EstimatorParams
+from ccopt.estimation.estimator import Estimator, EstimatorParams
 from ccopt.estimation.kinematics import KinematicsParams
 from ccopt.experiment import Experiment, run_experiment
 from ccopt.metrics import sample_at
@@ -192,3 +197,42 @@ def test_a_ground_slide_that_slid_the_hand_is_not_taken_for_the_grounds(checked:
         assert all(g["status"] == "reached" for g in goals[1:3]), goals
     else:
         assert any(not g["within_tolerance"] and g["targets"]["s_g_mm"] is not None for g in claimed), goals
+
+
+HAND_GAVE_TRIANGLE = (
+    ((0.06830254659072219, 0.05404367711953298), (-0.07274439515226586, 0.05077839230979951),
+     (-0.0704341208080029, -0.025318491176577907)),
+    0.4643631313027823, 0.5894393882394463, 0.6913196117345117,
+)
+
+
+@pytest.mark.parametrize("dropped", [True, False], ids=["lost slide dropped", "kept"])
+def test_a_lost_ground_slide_that_slid_the_hand_teaches_nothing_of_the_ground(
+    dropped: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The case: a ground slide of the ``s_g`` goal ended ``lost`` with the hand moved 3 mm or more
+    along the face by the truth and the ground less than 1 mm. Kept (the evidence of that slide left
+    as it was), the goal, which the oracle reaches, was reported unreachable; dropped, it is reached
+    within its tolerance by the truth."""
+    if not dropped:
+        keep = lambda self, commanded, kinematics, slid: slid  # noqa: E731
+        monkeypatch.setattr(Estimator, "_drop_unfounded_slide", keep)
+    goals = (reach(theta_deg=31.588733853924694), reach(s_g_mm=-10.0))
+    done = run(*HAND_GAVE_TRIANGLE, goals, 2463577266)
+    data, goal = done.result.samples, done.summary["goals"][1]
+    truth = np.asarray(data["true_coordinates"])
+
+    def moved(step, coordinate: int) -> float:
+        begin, end = sample_at(data, step.start_time), sample_at(data, step.end_time)
+        return abs(truth[end, coordinate] - truth[begin, coordinate])
+
+    lost = [
+        s for s in done.result.steps
+        if s.goal == goal["index"] and s.kind == "slide_ground" and s.status == "lost"
+    ]
+    assert any(moved(s, 1) >= 0.003 and moved(s, 2) < 0.001 for s in lost)
+    assert goal["oracle"]["reachable"]
+    if dropped:
+        assert goal["status"] == "reached" and goal["within_tolerance"], goal
+    else:
+        assert goal["status"] == "unreachable", goal

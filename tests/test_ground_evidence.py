@@ -576,3 +576,16 @@ def test_a_chord_crossing_up_below_the_origin_is_turned_through_the_origin():
         assert offset - normal @ weak > 3.0  # and so does the estimated row
         deep = sliding_point(sign, 30.0)
         assert offset - normal @ deep <= MU_G * weight + 3.0 * NOISE
+
+
+def test_restored_evidence_counts_as_if_the_contact_had_not_been_let_move():
+    """A slide seen towards +x (2.5 mm), restored to nothing seen: neither side, and the next 2 mm are
+    counted from where the contact is then, as by a fresh SlideEvidence that sees them alone."""
+    slides = SlideEvidence(DISTANCE)
+    for s_g in (0.100, 0.1025):
+        slides.update(s_g, 1)
+    assert slides.slid == [True, False]
+    slides.restore((False, False))
+    assert slides.slid == [False, False] and slides.confirmed == 0
+    after = [(0.1035, 1), (0.1050, 1), (0.1056, 1)]
+    assert [slides.update(s_g, way) for s_g, way in after] == slid_after(after)

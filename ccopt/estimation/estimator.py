@@ -306,6 +306,7 @@ class Estimator:
         self._patch: tuple[float, float] | None = None  # the known face on the hand (known_patch)
         self._mismatch: tuple[int, float, float, int] | None = None  # samples, least/largest θ_o, resets
         self._give: list[float] | None = None  # start, moment sum, samples, filtered ŝ_h, last time
+        self._ground_slide_start: tuple | None = None  # evidence and sliding fit as a ground slide began
         self._last: Estimate | None = None
 
     def update(
@@ -368,6 +369,7 @@ class Estimator:
         self._check_moment(theta_o)
         self._check_hand_give(time, commanded, theta_h, likely, kinematics, f_n, f_t, torque)
         slid, ground_way = self._slid(commanded, kinematics, theta_h, both, likely)
+        slid = self._drop_unfounded_slide(commanded, kinematics, slid)
         sliding_face = self.sliding_face.update(
             time, force_world, ground_way if in_contact else 0, self.ground_slides.confirmed
         )
@@ -593,6 +595,34 @@ class Estimator:
             way = None
         return self.ground_slides.update(kinematics.s_g, way), way
 
+    def _drop_unfounded_slide(
+        self, commanded: ContactConfiguration | None, kinematics: KinematicEstimate, slid: tuple[bool, bool]
+    ) -> tuple[bool, bool]:
+        """The ways the ground was seen sliding, without what a commanded ground slide added before
+        its kinematics were lost (reset or released: :meth:`_check_hand_give`, :func:`either_slides`,
+        a hand that gave seen by the pose); the sliding-force fit loses that slide's forces too.
+
+        The evidence came from ``ŝ_g`` moving as the kinematics followed the ground, and the
+        kinematics were let go because what moved may have been the hand: kept, the hand's friction
+        limit, seen in world axes, became the ground's friction face on that side (and, mirrored,
+        on the other). On the goals study (seed 6, trial 34) a ground slide at 10° moved the hand
+        7.7 mm along the face in 3 s, the ground not at all; the face it left had ``μ̂_g`` 0.29
+        against the true 0.69, the estimated statics then put the slides towards ``−s_g`` at
+        −12–4° instead of the true −28 to −12°, and the goal was reported unreachable."""
+        if commanded is None or commanded.ground_mode == _STICK:
+            self._ground_slide_start = None
+            return slid
+        start = self._ground_slide_start
+        if start is None:
+            self._ground_slide_start = (slid, self.sliding_face.snapshot())
+            return slid
+        lost = not (kinematics.theta_o_valid and kinematics.s_h_valid and kinematics.contact_valid)
+        if lost and slid != start[0]:
+            self.ground_slides.restore(start[0])
+            self.sliding_face.restore(start[1])
+            return start[0]
+        return slid
+
     def _ground_gave(self, hand: ContactMode | None, likely: ContactConfiguration, theta_h: float) -> bool:
         """Whether a ground the kinematics follow in a commanded hand slide is the contact that gave:
         the forces keep the hand inside its friction cone (``likely``; ``μ̂_h`` is at most the true
@@ -706,6 +736,12 @@ class SlideEvidence:
                 self._start, self._angle = position, angle
                 self.confirmed += 1
         return self.slid[0], self.slid[1]
+
+    def restore(self, slid: tuple[bool, bool]) -> None:
+        """Set the ways seen sliding back to ``slid`` (``[+, −]``), as if the contact had not been
+        let move since."""
+        self.slid = list(slid)
+        self._start, self.confirmed = math.nan, 0
 
 
 @functools.cache  # 27 × 10 configurations: each case is made once

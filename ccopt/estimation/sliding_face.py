@@ -151,6 +151,18 @@ class SlidingFaceFit:
             self._stretch.append((outward, f_x * up_x + f_y * up_y))
         return self.face
 
+    def snapshot(self) -> tuple[list[float], int, SlidingFace]:
+        """The fit as it stands (for :meth:`restore`)."""
+        return list(self._sums), self._stretches, self.face
+
+    def restore(self, state: tuple[list[float], int, SlidingFace]) -> None:
+        """Go back to a :meth:`snapshot`, dropping every force fitted since and the current stretch:
+        the slide they came from was not the ground's."""
+        sums, self._stretches, self.face = state
+        self._sums = list(sums)
+        self._stretch.clear()
+        self._confirmed = 0
+
     def _add(self, forces: list[tuple[float, float]]) -> None:
         if not forces:
             return
