@@ -617,7 +617,7 @@ class Estimator:
             self._ground_slide_start = (slid, self.sliding_face.snapshot())
             return slid
         lost = not (kinematics.theta_o_valid and kinematics.s_h_valid and kinematics.contact_valid)
-        if lost and slid != start[0]:
+        if lost and (slid != start[0] or self.sliding_face.face is not start[1][2]):
             self.ground_slides.restore(start[0])
             self.sliding_face.restore(start[1])
             return start[0]
