@@ -66,7 +66,13 @@ from ccopt.estimation.gravity import (
 from ccopt.estimation.ground_cone import GroundCone, GroundConeEstimator, GroundConeParams
 from ccopt.estimation.kinematics import KinematicEstimate, KinematicEstimator, KinematicsParams
 from ccopt.estimation.quantile import check_number
-from ccopt.estimation.sliding_face import UNDETERMINED, SlidingFace, SlidingFaceFit, SlidingFaceParams
+from ccopt.estimation.sliding_face import (
+    UNDETERMINED,
+    FitSnapshot,
+    SlidingFace,
+    SlidingFaceFit,
+    SlidingFaceParams,
+)
 from ccopt.hand import Hand
 from ccopt.modes import ContactConfiguration, ContactMode, HandGeometry
 
@@ -306,7 +312,7 @@ class Estimator:
         self._patch: tuple[float, float] | None = None  # the known face on the hand (known_patch)
         self._mismatch: tuple[int, float, float, int] | None = None  # samples, least/largest θ_o, resets
         self._give: list[float] | None = None  # start, moment sum, samples, filtered ŝ_h, last time
-        self._ground_slide_start: tuple | None = None  # evidence and sliding fit as a ground slide began
+        self._ground_slide_start: tuple[tuple[bool, bool], FitSnapshot] | None = None  # at a slide's start
         self._last: Estimate | None = None
 
     def update(
@@ -616,11 +622,12 @@ class Estimator:
         if start is None:
             self._ground_slide_start = (slid, self.sliding_face.snapshot())
             return slid
+        slid_then, fit_then = start
         lost = not (kinematics.theta_o_valid and kinematics.s_h_valid and kinematics.contact_valid)
-        if lost and (slid != start[0] or self.sliding_face.face is not start[1][2]):
-            self.ground_slides.restore(start[0])
-            self.sliding_face.restore(start[1])
-            return start[0]
+        if lost and (slid != slid_then or self.sliding_face.face is not fit_then.face):
+            self.ground_slides.restore(slid_then)
+            self.sliding_face.restore(fit_then)
+            return slid_then
         return slid
 
     def _ground_gave(self, hand: ContactMode | None, likely: ContactConfiguration, theta_h: float) -> bool:

@@ -39,6 +39,7 @@ from __future__ import annotations
 import math
 import statistics
 from dataclasses import dataclass
+from typing import NamedTuple
 
 from ccopt.clock import interval_passed
 from ccopt.estimation.ground_cone import friction_face_normal
@@ -113,6 +114,14 @@ UNDETERMINED = SlidingFace(False, math.nan, math.nan, math.nan, math.nan, 0, 0)
 """The fit before any slide determined it."""
 
 
+class FitSnapshot(NamedTuple):
+    """A :class:`SlidingFaceFit` as it stood (:meth:`SlidingFaceFit.snapshot`)."""
+
+    sums: list[float]
+    stretches: int
+    face: SlidingFace
+
+
 class SlidingFaceFit:
     """Running total least squares fit of the ground's sliding forces (module docstring)."""
 
@@ -151,15 +160,14 @@ class SlidingFaceFit:
             self._stretch.append((outward, f_x * up_x + f_y * up_y))
         return self.face
 
-    def snapshot(self) -> tuple[list[float], int, SlidingFace]:
+    def snapshot(self) -> FitSnapshot:
         """The fit as it stands (for :meth:`restore`)."""
-        return list(self._sums), self._stretches, self.face
+        return FitSnapshot(list(self._sums), self._stretches, self.face)
 
-    def restore(self, state: tuple[list[float], int, SlidingFace]) -> None:
+    def restore(self, state: FitSnapshot) -> None:
         """Go back to a :meth:`snapshot`, dropping every force fitted since and the current stretch:
         the slide they came from was not the ground's."""
-        sums, self._stretches, self.face = state
-        self._sums = list(sums)
+        self._sums, self._stretches, self.face = list(state.sums), state.stretches, state.face
         self._stretch.clear()
         self._confirmed = 0
 
