@@ -1,6 +1,7 @@
 """What counts as evidence of the ground's friction faces: the ground seen sliding (SlideEvidence), the
 friction-face rules of the ground hull (FACE_COSINE_RANGE), and Estimate.ground_fitted / mu_g on
-synthetic runs of a known object, with the commands a closed loop passes."""
+synthetic runs of a known object, with the commands a closed loop passes; and what a lost ground slide
+leaves of that evidence (Estimator._drop_unfounded_slide)."""
 
 from __future__ import annotations
 
@@ -15,6 +16,8 @@ from ccopt import contact, geometry
 from ccopt.estimation import Estimate, Estimator, EstimatorParams, GroundConeEstimator, GroundConeParams
 from ccopt.estimation.estimator import SlideEvidence, ground_friction_faces
 from ccopt.estimation.ground_cone import FACE_COSINE_RANGE, FACE_WINDOW_STEPS
+from ccopt.estimation.kinematics import KinematicEstimate
+from ccopt.estimation.sliding_face import SlidingFaceFit
 from ccopt.hand import Hand
 from ccopt.modes import ContactConfiguration, ContactMode, Motion, configuration
 
@@ -589,3 +592,55 @@ def test_restored_evidence_counts_as_if_the_contact_had_not_been_let_move():
     assert slides.slid == [False, False] and slides.confirmed == 0
     after = [(0.1035, 1), (0.1050, 1), (0.1056, 1)]
     assert [slides.update(s_g, way) for s_g, way in after] == slid_after(after)
+
+
+# --- A lost ground slide's evidence (Estimator._drop_unfounded_slide) ------------------------------
+
+SLIDE_POS = ContactConfiguration(ground_mode=ContactMode.SLIDE_POS)
+
+
+def slide_forces(
+    fit_face: SlidingFaceFit, pressings: list[tuple[float, float]], share: float, time: float
+) -> float:
+    """Feed the sliding-force fit ``fit_face`` one commanded slide towards +x from ``time`` (s): per
+    ``(from, to)`` N of pressing, 80 forces at 1 kHz of tangential force ``share`` × the true face's,
+    the slide confirmed once more at each stretch's end; then one sample with no slide. The time reached."""
+    weight = MASS * geometry.GRAVITY
+    for confirmed, (start, end) in enumerate(pressings, start=1):
+        forces = [(share * MU_G * (weight + p), -p) for p in np.linspace(start, end, 80)]
+        for k, force in enumerate(forces):
+            time += 1.0 / RATE
+            fit_face.update(time, force, 1, confirmed if k == len(forces) - 1 else confirmed - 1)
+    time += 1.0 / RATE
+    fit_face.update(time, (0.0, -5.0), 0, 0)
+    return time
+
+
+def kinematics(valid: bool) -> KinematicEstimate:
+    """Kinematics at a ground contact at the origin, all three parts ``valid`` or all lost."""
+    value = 0.0 if valid else math.nan
+    return KinematicEstimate(
+        theta_o=0.3, s_h=value, s_g=value, d=value, r_o=np.array((value, 0.0)), std=(1e-3,) * 4,
+        theta_o_valid=valid, s_h_valid=valid, contact_valid=valid,
+    )
+
+
+@pytest.mark.parametrize("lost", [True, False], ids=["lost", "kept valid"])
+def test_a_lost_slide_that_only_refitted_the_face_is_dropped_from_the_fit(lost: bool):
+    """A commanded slide towards +x that saw no new way (+x was seen before it) but whose forces
+    (the hand's limit: half the true tangential force) refitted the sliding face. Lost, the fit goes
+    back to that of a second fit that never saw those forces, and the ways stay as they were; with the
+    kinematics still valid, the slide's forces stay in the fit."""
+    estimator, clean = Estimator(Hand(half_length=L_H)), SlidingFaceFit()
+    first = [(2.0, 6.0), (6.0, 9.0), (9.0, 12.0)]
+    time = slide_forces(estimator.sliding_face, first, 1.0, 0.0)
+    slide_forces(clean, first, 1.0, 0.0)
+    assert clean.face.determined and clean.face.mu_g == pytest.approx(MU_G, rel=1e-6)
+    estimator.ground_slides.slid = [True, False]
+    seen = (True, False)
+    assert estimator._drop_unfounded_slide(SLIDE_POS, kinematics(True), seen) == seen
+    slide_forces(estimator.sliding_face, [(3.0, 6.0), (6.0, 9.0)], 0.5, time)
+    assert estimator.sliding_face.face != clean.face
+    assert estimator._drop_unfounded_slide(SLIDE_POS, kinematics(not lost), seen) == seen
+    assert estimator.ground_slides.slid == [True, False]
+    assert (estimator.sliding_face.face == clean.face) == lost
