@@ -1,10 +1,12 @@
 """The closed loop on the planar plant, scored against the simulator's ground truth."""
 
+import math
+
 import numpy as np
 import pytest
 
 from ccopt import closed_loop, metrics, record
-from ccopt.objects import make_object
+from ccopt.objects import PAPER_ADDED_MASS, make_object
 from ccopt.plant.sensors import SensorParams, parse_fault
 from ccopt.schedule import Goal, load_schedule
 
@@ -40,6 +42,34 @@ def test_the_smoke_run_estimates_the_kinematics_within_the_bar(smoke_run):
     valid = result.samples["est_kinematics_valid"]
     assert valid.any() and valid[np.argmax(valid) :].mean() > 0.95
     assert summary["kinematics_valid_share"] > 0.4
+    assert summary["theta_err_deg"]["median"] <= 1.0
+    assert summary["s_h_err_mm"]["median"] <= 3.0 and summary["s_g_err_mm"]["median"] <= 3.0
+
+
+PAPER_CASES = [(name, 0.0) for name in ("triangle", "square", "rectangle", "pentagon", "hexagon")] + [
+    ("triangle", PAPER_ADDED_MASS),
+    ("pentagon", PAPER_ADDED_MASS),
+]
+FIRST_VALID_DEG = 15.0  # of pivoting, issue 10's "after the first ~15°"
+
+
+@pytest.mark.parametrize(("name", "added_mass"), PAPER_CASES, ids=[f"{n}+{m}kg" for n, m in PAPER_CASES])
+def test_every_paper_object_has_valid_kinematics_within_15_degrees_of_pivoting(name: str, added_mass: float):
+    """On each of the seven paper cases the smoke schedule's pivots (about 29° of turning in all) make
+    the kinematics valid before the object has turned 15° by the truth (measured over seeds 0–2:
+    7.3–13.8°), they stay valid, and the estimates match the truth within the bar (θ_o 1°, s_h and
+    s_g 3 mm, medians), with no unintended slip."""
+    schedule = load_schedule("smoke")
+    result = closed_loop.run(make_object(f"paper-{name}", added_mass=added_mass), schedule, seed=1)
+    steps = [step.as_dict() for step in result.steps]
+    summary = metrics.summarize(result.samples, steps, len(schedule.steps), result.sim_time, result.wall_time)
+    valid = np.asarray(result.samples["est_kinematics_valid"])
+    theta = np.asarray(result.samples["true_coordinates"])[:, 0]
+    turned = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(theta)))])
+    first = int(np.argmax(valid))
+    assert summary["completed"] and summary["unintended_slips"] == 0, summary["slip_events"]
+    assert valid.any() and turned[first] < math.radians(FIRST_VALID_DEG), math.degrees(turned[first])
+    assert valid[first:].mean() > 0.95
     assert summary["theta_err_deg"]["median"] <= 1.0
     assert summary["s_h_err_mm"]["median"] <= 3.0 and summary["s_g_err_mm"]["median"] <= 3.0
 
