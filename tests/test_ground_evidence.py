@@ -20,6 +20,8 @@ from ccopt.estimation.kinematics import KinematicEstimate
 from ccopt.estimation.sliding_face import SlidingFaceFit
 from ccopt.hand import Hand
 from ccopt.modes import ContactConfiguration, ContactMode, Motion, configuration
+from tests.test_sliding_face import FIRST_SLIDE, HAND_LIMIT_SLIDE, feed
+from tests.test_sliding_face import MU_G as FACE_MU_G
 
 DISTANCE = 2e-3  # m, the slid distance of the SlideEvidence under test
 SIN_3 = math.sin(math.radians(3.0))
@@ -599,23 +601,6 @@ def test_restored_evidence_counts_as_if_the_contact_had_not_been_let_move():
 SLIDE_POS = ContactConfiguration(ground_mode=ContactMode.SLIDE_POS)
 
 
-def slide_forces(
-    fit_face: SlidingFaceFit, pressings: list[tuple[float, float]], share: float, time: float
-) -> float:
-    """Feed the sliding-force fit ``fit_face`` one commanded slide towards +x from ``time`` (s): per
-    ``(from, to)`` N of pressing, 80 forces at 1 kHz of tangential force ``share`` × the true face's,
-    the slide confirmed once more at each stretch's end; then one sample with no slide. The time reached."""
-    weight = MASS * geometry.GRAVITY
-    for confirmed, (start, end) in enumerate(pressings, start=1):
-        forces = [(share * MU_G * (weight + p), -p) for p in np.linspace(start, end, 80)]
-        for k, force in enumerate(forces):
-            time += 1.0 / RATE
-            fit_face.update(time, force, 1, confirmed if k == len(forces) - 1 else confirmed - 1)
-    time += 1.0 / RATE
-    fit_face.update(time, (0.0, -5.0), 0, 0)
-    return time
-
-
 def kinematics(valid: bool) -> KinematicEstimate:
     """Kinematics at a ground contact at the origin, all three parts ``valid`` or all lost."""
     value = 0.0 if valid else math.nan
@@ -632,14 +617,13 @@ def test_a_lost_slide_that_only_refitted_the_face_is_dropped_from_the_fit(lost: 
     back to that of a second fit that never saw those forces, and the ways stay as they were; with the
     kinematics still valid, the slide's forces stay in the fit."""
     estimator, clean = Estimator(Hand(half_length=L_H)), SlidingFaceFit()
-    first = [(2.0, 6.0), (6.0, 9.0), (9.0, 12.0)]
-    time = slide_forces(estimator.sliding_face, first, 1.0, 0.0)
-    slide_forces(clean, first, 1.0, 0.0)
-    assert clean.face.determined and clean.face.mu_g == pytest.approx(MU_G, rel=1e-6)
+    time = feed(estimator.sliding_face, FIRST_SLIDE, 1)
+    feed(clean, FIRST_SLIDE, 1)
+    assert clean.face.determined and clean.face.mu_g == pytest.approx(FACE_MU_G, rel=1e-6)
     estimator.ground_slides.slid = [True, False]
     seen = (True, False)
     assert estimator._drop_unfounded_slide(SLIDE_POS, kinematics(True), seen) == seen
-    slide_forces(estimator.sliding_face, [(3.0, 6.0), (6.0, 9.0)], 0.5, time)
+    feed(estimator.sliding_face, HAND_LIMIT_SLIDE, 1, time)
     assert estimator.sliding_face.face != clean.face
     assert estimator._drop_unfounded_slide(SLIDE_POS, kinematics(not lost), seen) == seen
     assert estimator.ground_slides.slid == [True, False]

@@ -131,19 +131,25 @@ def test_bad_parameters_raise_naming_the_field(field, value):
         SlidingFaceParams(**{field: value})
 
 
+FIRST_SLIDE = [(on_face(1, [2.0, 6.0]), 1), (on_face(1, [6.0, 9.0]), 2), (on_face(1, [9.0, 12.0]), 3)]
+"""Three stretches of a slide towards +x on the true face (for :func:`feed`)."""
+HAND_LIMIT_SLIDE = [
+    ([(0.5 * x, y) for x, y in on_face(1, span)], k) for k, span in ((1, [3.0, 6.0]), (2, [6.0, 9.0]))
+]
+"""Two stretches of a slide towards +x whose forces are off the face: the hand's limit, half the
+tangential force (the hand slid, not the ground)."""
+
+
 def test_a_restored_fit_is_the_fit_that_never_saw_the_slide():
     """Two slides' stretches, then a third slide of forces off the face (the hand's limit, half the
     tangential force) dropped by :meth:`SlidingFaceFit.restore` to the snapshot taken as it began:
     the face, and the face after one more slide, equal those of a fit fed the other slides only."""
-    first = [(on_face(1, [2.0, 6.0]), 1), (on_face(1, [6.0, 9.0]), 2), (on_face(1, [9.0, 12.0]), 3)]
     second = [(on_face(-1, [2.0, 6.0]), 1), (on_face(-1, [14.0, 17.0]), 2)]
-    spans = ((1, [3.0, 6.0]), (2, [6.0, 9.0]))
-    wrong = [([(0.5 * x, y) for x, y in on_face(1, span)], k) for k, span in spans]
     fit, clean = SlidingFaceFit(), SlidingFaceFit()
-    time = feed(fit, first, 1)
-    feed(clean, first, 1)
+    time = feed(fit, FIRST_SLIDE, 1)
+    feed(clean, FIRST_SLIDE, 1)
     state = fit.snapshot()
-    time = feed(fit, wrong, 1, time)
+    time = feed(fit, HAND_LIMIT_SLIDE, 1, time)
     assert fit.face != clean.face
     fit.restore(state)
     assert fit.face == clean.face
