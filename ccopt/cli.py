@@ -426,7 +426,8 @@ def _figure_files(folder: Path) -> dict[Path, tuple[int, int, int]]:
 def run_with_progress(experiment, obj, schedule, params, seed, args, folder):
     """Run the experiment with a tqdm bar over the schedule's steps (unless ``--no-progress``); the
     oracle's warnings about impossible steps go to stderr first."""
-    from tqdm import tqdm
+    with stops_held():  # an import stopped inside code it runs from a string ends python -m by SIGINT
+        from tqdm import tqdm
 
     bar = tqdm(total=len(schedule.steps), unit="step", disable=args.no_progress, leave=False, mininterval=0.5)
     with bar:

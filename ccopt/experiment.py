@@ -34,6 +34,7 @@ from ccopt.planning.tour import Tour, plan_tour, vertex_range
 from ccopt.plant.base import StartConfig
 from ccopt.record import load_record, write_summary
 from ccopt.schedule import Schedule
+from ccopt.stops import stops_held
 
 
 @dataclass(frozen=True)
@@ -213,17 +214,19 @@ def run_experiment(
 
     ``warn`` receives one line per step the oracle finds impossible, before the run starts;
     ``on_tick`` is passed to :func:`ccopt.closed_loop.run`. Ctrl-C ends the run early: the result
-    says ``interrupted`` and the summary scores what was run.
+    says ``interrupted`` and the summary scores what was run. Ctrl-C while the schedule is checked
+    waits, as during the loop's set-up, and then raises ``KeyboardInterrupt`` before the run starts.
     """
     params = params or LoopParams()
-    checks = check_schedule(obj, schedule, params)
-    if warn is not None:
-        impossible = statics.impossible_steps(checks)
-        for check in checks:
-            if check.index in impossible:
-                warn(f"not physically possible for this object: {check.describe()}")
-    meta = run_meta(obj, schedule, seed, params)
-    meta["feasibility"] = [asdict(check) for check in checks]
+    with stops_held():  # set-up, as the loop's own (see closed_loop.run)
+        checks = check_schedule(obj, schedule, params)
+        if warn is not None:
+            impossible = statics.impossible_steps(checks)
+            for check in checks:
+                if check.index in impossible:
+                    warn(f"not physically possible for this object: {check.describe()}")
+        meta = run_meta(obj, schedule, seed, params)
+        meta["feasibility"] = [asdict(check) for check in checks]
     result = closed_loop.run(obj, schedule, params, seed=seed, out=folder, meta=meta, on_tick=on_tick)
     data = load_record(folder).data if folder is not None else result.samples
     steps = [step.as_dict() for step in result.steps]

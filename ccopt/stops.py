@@ -96,9 +96,16 @@ def stops_held() -> Iterator[None]:
     ``ImportError: initialization failed``, CasADi building a function may drop it
     (:func:`stop_requested`), and once a Panda run stopped while it started was killed by SIGINT
     after it had handled the interrupt (4 of 40 such runs went wrong before its set-up was held and
-    the loop polled, 0 of 80 after). Under :func:`stop_signals` it holds all three stop signals (a
-    second one still ends the program at once); otherwise Ctrl-C, as long as no other handler than
-    Python's own is set (a second Ctrl-C then interrupts at once).
+    the loop polled, 0 of 80 after; 1 in a later CI run, stopped after its folder was made and
+    before its loop's set-up: the progress bar's import, the check of its schedule, held since).
+    That death has a cause in CPython (3.10–3.13 seen): an interrupt raised within code that
+    ``exec`` or ``eval`` runs from a string (a named tuple or a data class being made, as a module
+    is imported) is marked unhandled even when it is caught, and ``python -m`` then ends by SIGINT
+    instead of its exit status, unless a later such ``eval`` clears the mark.
+
+    Under :func:`stop_signals` it holds all three stop signals (a second one still ends the program
+    at once); otherwise Ctrl-C, as long as no other handler than Python's own is set (a second
+    Ctrl-C then interrupts at once).
 
     Outside the main thread (where signals are not handled) it changes nothing. Blocks nest: the
     outermost one raises.
