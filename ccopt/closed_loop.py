@@ -760,8 +760,9 @@ def run(
     loop ``error`` with its one-line message. The record is closed with that status in every case.
     Ctrl-C while the run is being set up waits until the set-up is done (:func:`ccopt.stops.stops_held`)
     and then raises ``KeyboardInterrupt``, before the first sample: the record is left ``running``
-    with no sample (:func:`ccopt.record.discard_unstarted` removes it). A stop signal whose interrupt
-    CasADi dropped is acted on all the same, at the next control tick
+    with no sample (:func:`ccopt.record.discard_unstarted` removes it). So does Ctrl-C in the loop
+    before its first sample is recorded: a run with nothing recorded did not begin. A stop signal
+    whose interrupt CasADi dropped is acted on all the same, at the next control tick
     (:func:`ccopt.stops.stop_requested`).
     """
     with stops_held():  # building the plant loads libraries that an interrupt would break
@@ -856,6 +857,8 @@ class _Loop:
                 if self.now >= limit:
                     self._stop("timeout", f"the run's time limit of {limit:g} s (simulated) ran out")
         except KeyboardInterrupt:
+            if not self._recorded():  # stopped before its first sample: as if while starting
+                raise
             self.status, self.message = "interrupted", "interrupted"
         except Exception as error:
             self.status, self.message = "error", f"{type(error).__name__}: {error}".splitlines()[0]
@@ -887,6 +890,10 @@ class _Loop:
         health = self.health.update(time, pose, wrench, self.target)
         if not health.ok:
             self._stop("sensor_fault", health.message)
+
+    def _recorded(self) -> bool:
+        """Whether the run has recorded a sample yet (to its folder, or in memory)."""
+        return self.writer.samples > 0 if self.writer is not None else bool(self.samples)
 
     def _lost(self) -> bool:
         """Whether the last reading was lost: no finite hand pose, or a sample the estimator skipped."""

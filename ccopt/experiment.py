@@ -215,7 +215,8 @@ def run_experiment(
     ``warn`` receives one line per step the oracle finds impossible, before the run starts;
     ``on_tick`` is passed to :func:`ccopt.closed_loop.run`. Ctrl-C ends the run early: the result
     says ``interrupted`` and the summary scores what was run. Ctrl-C while the schedule is checked
-    waits, as during the loop's set-up, and then raises ``KeyboardInterrupt`` before the run starts.
+    waits, as during the loop's set-up, and then raises ``KeyboardInterrupt`` before the run starts;
+    so does Ctrl-C before the loop's first sample (:func:`ccopt.closed_loop.run`).
     """
     params = params or LoopParams()
     with stops_held():  # set-up, as the loop's own (see closed_loop.run)

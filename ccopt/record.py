@@ -242,6 +242,11 @@ class RecordWriter:
         if self._count % self.flush_every == 0:
             self.flush()
 
+    @property
+    def samples(self) -> int:
+        """The samples appended so far (flushed or still buffered)."""
+        return self._count
+
     def flush(self) -> None:
         """Write the buffered samples as the next chunk (atomically). A signal (Ctrl-C, SIGTERM) while
         it writes leaves the samples buffered and the chunk's number free: the next flush (the one

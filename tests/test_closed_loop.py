@@ -99,6 +99,24 @@ def test_an_interrupted_run_keeps_its_record(tmp_path):
     assert len(kept["time"]) == len(kept["true_coordinates"])
 
 
+def test_a_run_interrupted_before_its_first_sample_did_not_begin(tmp_path, monkeypatch):
+    """Ctrl-C in the loop's first tick, before a sample is recorded (seen in CI on a loaded machine):
+    the run raises ``KeyboardInterrupt`` as while starting and leaves an unstarted run's folder, which
+    :func:`ccopt.record.discard_unstarted` removes (not an empty ``interrupted`` record)."""
+
+    def interrupt(self, *args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(closed_loop.Estimator, "update", interrupt)
+    out = tmp_path / "run"
+    with pytest.raises(KeyboardInterrupt):
+        closed_loop.run(make_object("paper-triangle"), load_schedule("smoke"), seed=0, out=out)
+    assert record.load_record(out).meta["status"] == "running"
+    assert record.discard_unstarted(out) and not list(out.iterdir())
+    with pytest.raises(KeyboardInterrupt):
+        closed_loop.run(make_object("paper-triangle"), load_schedule("smoke"), seed=0)
+
+
 def test_a_run_that_ends_early_reports_every_goal_it_never_began(tmp_path):
     """Interrupted in the exploration, before its first goal: every goal step of the schedule has a
     result, in the schedule's order, ``failed`` as not begun (a study that counts the results would
