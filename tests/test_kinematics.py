@@ -455,3 +455,54 @@ def test_a_ground_slide_whose_hand_sticks_is_not_taken_for_a_hand_slide(theta_de
         estimate = step(estimator, pose, GROUND_SLIDES)
         assert abs(estimate.s_g - x_o) < 1e-3
     assert abs(estimate.s_h - S_H) < 1e-3
+
+
+def pivot_from(
+    estimator: KinematicEstimator, rng, theta: float, s_h: float, r_o: np.ndarray, span_deg: float
+):
+    """Pivot the object (hand sticking, flush) about ``r_o`` from ``theta`` by ``span_deg`` and back."""
+    for angle in theta + np.radians(span_deg) * np.sin(np.linspace(0.0, np.pi, 400)):
+        estimate = step(estimator, measured(geometry.hand_pose_from_contact(angle, s_h, D, r_o), rng))
+    return estimate
+
+
+@pytest.mark.parametrize("hand_slid", [True, False])
+@pytest.mark.parametrize("theta_deg", [-5.0, 4.0])
+def test_a_ground_slide_near_the_vertical_whose_hand_may_have_slid_is_settled_by_the_next_pivot(
+    theta_deg, hand_slid
+):
+    """Within ``split_tilt`` of the vertical a commanded ground slide and a hand slide along the face
+    move the hand alike (their difference, ``Δ sin θ``, is under the pose noise), and while the hand
+    is at its friction limit either may be the one that moved. The kinematics follow the ground (the
+    command) but afterwards hold the other reading one standard deviation away: they are not valid
+    until a pivot, which rotates the two readings apart, tells them; by truth ``ŝ_g`` and ``ŝ_h``
+    then stand within a millimetre, whichever contact slid."""
+    estimator, rng = KinematicEstimator(L_H), np.random.default_rng(21)
+    pivot_about_ground(estimator, rng)
+    theta, travel = math.radians(theta_deg), 0.008
+    r_o, s_h = R_O.copy(), S_H
+    for fraction in np.linspace(0.0, 1.0, 300):
+        if hand_slid:
+            s_h = S_H + travel * fraction
+        else:
+            r_o = R_O - np.array([travel * fraction, 0.0])
+        pose = measured(geometry.hand_pose_from_contact(theta, s_h, D, r_o), rng)
+        step(estimator, pose, GROUND_SLIDES, hand_may_slide=True)
+    after = step(estimator, measured(geometry.hand_pose_from_contact(theta, s_h, D, r_o), rng))
+    assert not after.contact_valid
+    estimate = pivot_from(estimator, rng, theta, s_h, r_o, span_deg=-7.2 if theta_deg > 0 else 7.2)
+    assert estimate.contact_valid and estimate.s_h_valid
+    assert abs(estimate.s_g - r_o[0]) < 1e-3 and abs(estimate.s_h - s_h) < 1e-3
+
+
+def test_a_ground_slide_near_the_vertical_whose_hand_stayed_inside_its_friction_stays_valid():
+    """The control case: the hand was never at its friction limit, so it stuck (``μ̂_h`` is a lower
+    bound) and the slide was the ground's: the kinematics stay valid, by truth within a millimetre."""
+    estimator, rng = KinematicEstimator(L_H), np.random.default_rng(22)
+    pivot_about_ground(estimator, rng)
+    theta = math.radians(-5.0)
+    for x_o in np.linspace(R_O[0], R_O[0] - 0.008, 300):
+        r_o = np.array([x_o, R_O[1]])
+        step(estimator, measured(geometry.hand_pose_from_contact(theta, S_H, D, r_o), rng), GROUND_SLIDES)
+    estimate = step(estimator, measured(geometry.hand_pose_from_contact(theta, S_H, D, r_o), rng))
+    assert estimate.contact_valid and abs(estimate.s_g - r_o[0]) < 1e-3 and abs(estimate.s_h - S_H) < 1e-3

@@ -804,7 +804,9 @@ def either_slides(
     6–8 mm; taken as the ground's, they left ``ŝ_g`` and ``ŝ_h`` off by as much and marked a ground
     friction face where the ground never slid. Where the hand has not slid yet ``μ̂_h`` is only
     the largest ratio seen, which every first ground slide reaches: releasing both there made the
-    tours' ground slides noisy and slow, so the command is trusted (a documented gap)."""
+    tours' ground slides noisy and slow, so the command is trusted while the slide runs, and the
+    kinematics hold the other reading once it ends, until a pivot settles it
+    (:meth:`~ccopt.estimation.kinematics.KinematicEstimator._doubt_following`)."""
     return (
         unobservable
         and commanded is not None
