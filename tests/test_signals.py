@@ -98,13 +98,15 @@ def test_a_second_signal_ends_at_once_and_quietly(tmp_path):
 
 @pytest.mark.parametrize("delay", [0.0, 0.15, 0.4])
 def test_ctrl_c_while_starting_leaves_no_folder(tmp_path, delay):
-    """At any moment of the Panda's set-up (0.3–0.5 s after the folder is made, with the machine's
+    """At any moment of the Panda's set-up (0.2–0.5 s after the folder is made, with the machine's
     load: its model, the arm's libraries, the compiled QP): stopped there, it once exited 0 as if never
     stopped, once with ``ImportError: initialization failed``, and once killed by SIGINT after saying
     the right thing (4 of 40 tries at random moments). Where the set-up was done before the signal
     came (the last delay, on a quiet machine), the run was stopped in its loop and says so, its
     record kept; on a quick one its loop (0.3 s of wall time) may have ended by then, and the
-    signal stops the scoring: the record is whole and says ``completed``."""
+    signal stops the scoring: the record is whole and says ``completed``. Which outcome a delay gets
+    depends on the machine (measured here, quiet: set-up done between 0.20 and 0.25 s, the loop by
+    0.4 s), so each outcome is checked for what it must be, not tied to its delay."""
     out = tmp_path / "new" / "run"
     process = start(out, "--schedule", "smoke", "--plant", "panda")
     wait_for(out.is_dir, process)
@@ -115,10 +117,10 @@ def test_ctrl_c_while_starting_leaves_no_folder(tmp_path, delay):
     if err[0] == "ccopt run: interrupted before the run started; nothing was recorded":
         assert not (tmp_path / "new").exists()
     elif err[0].startswith("ccopt run: interrupted; the record so far is in"):
-        assert delay > 0.3 and status(out) == "interrupted", err
+        assert status(out) == "interrupted", err
         assert_loads(out, least=0)  # the signal may come a few samples into the loop (5 seen)
     else:
-        assert delay > 0.3 and err[0] == f"ccopt run: interrupted; the record is in {out}", err
+        assert err[0] == f"ccopt run: interrupted; the record is in {out}", err
         assert status(out) == "completed"
         assert_loads(out)
 
