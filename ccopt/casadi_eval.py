@@ -9,6 +9,7 @@ example a module-level one) can be shared by the threads of a Dask worker.
 :func:`compile_function` generates C for functions, compiles it once with the system C compiler and
 caches the library on disk by a hash of the source (``$CCOPT_CACHE_DIR``, else
 ``$XDG_CACHE_HOME/ccopt``, else ``~/.cache/ccopt``); ``casadi.external`` loads it.
+:func:`compile_source` does the same for C written by hand.
 """
 
 from __future__ import annotations
@@ -162,20 +163,17 @@ def default_cache_dir() -> Path:
     return Path(base) / "ccopt"
 
 
-def _compile_command(compiler: str, source: Path, library: Path) -> list[str]:
+def _compile_command(compiler: str, source: Path, library: Path, flags: Sequence[str]) -> list[str]:
+    return [compiler, "-O3", "-shared", "-fPIC", str(source), "-o", str(library), *flags, "-lm"]
+
+
+def _casadi_flags() -> list[str]:
+    """The headers and the static DAQP library that CasADi's generated C needs."""
     casadi_dir = Path(ca.__file__).parent
     return [
-        compiler,
-        "-O3",
-        "-shared",
-        "-fPIC",
-        str(source),
-        "-o",
-        str(library),
         f"-I{casadi_dir / 'include'}",
         f"-I{casadi_dir / 'include' / 'daqp'}",
         str(casadi_dir / "libdaqpstat.a"),
-        "-lm",
     ]
 
 
@@ -186,25 +184,36 @@ def compile_function(
     name: str | None = None,
 ) -> tuple[Path, bool]:
     """Generate C for ``function`` (or several functions, into one library named ``name``), compile
-    it once, and return ``(library path, cache hit)``; each function loads from it by its name.
-
-    The library is named by a hash of the generated source, the CasADi version and the compile
-    command, so a changed formulation compiles anew. Compilation writes to a temporary file and
-    renames it into place, so concurrent processes never load a half-written library. Raises
-    ``RuntimeError`` if no compiler is found or compilation fails.
-    """
+    it once, and return ``(library path, cache hit)``; each function loads from it by its name
+    (:func:`compile_source`)."""
     functions = [function] if isinstance(function, ca.Function) else list(function)
-    name = name or functions[0].name()
+    generator = ca.CodeGenerator(f"{name or functions[0].name()}.c", {"with_header": False})
+    for each in functions:
+        generator.add(each)
+    source = f"/* CasADi {ca.__version__} */\n{generator.dump()}"
+    return compile_source(name or functions[0].name(), source, cache_dir, compiler, _casadi_flags())
+
+
+def compile_source(
+    name: str,
+    source: str,
+    cache_dir: Path | None = None,
+    compiler: str | None = None,
+    flags: Sequence[str] = (),
+) -> tuple[Path, bool]:
+    """Compile the C ``source`` into a shared library once and return ``(library path, cache hit)``.
+
+    The library is named by a hash of the source and the compile command (``flags`` included), so a
+    changed source compiles anew. Compilation writes to a temporary file and renames it into place,
+    so concurrent processes never load a half-written library. Raises ``RuntimeError`` if no
+    compiler is found or compilation fails.
+    """
     compiler = compiler or os.environ.get("CC") or "cc"
     if shutil.which(compiler) is None:
         raise RuntimeError(f"no C compiler {compiler!r} on PATH")
-    generator = ca.CodeGenerator(f"{name}.c", {"with_header": False})
-    for each in functions:
-        generator.add(each)
-    source = generator.dump()
     cache = Path(cache_dir) if cache_dir is not None else default_cache_dir()
-    command_key = " ".join(_compile_command(compiler, Path("src.c"), Path("lib.so")))
-    digest = hashlib.sha256(f"{ca.__version__}\n{command_key}\n{source}".encode()).hexdigest()[:20]
+    command_key = " ".join(_compile_command(compiler, Path("src.c"), Path("lib.so"), flags))
+    digest = hashlib.sha256(f"{command_key}\n{source}".encode()).hexdigest()[:20]
     library = cache / f"{name}_{digest}.so"
     if library.exists():
         return library, True
@@ -214,7 +223,7 @@ def compile_function(
         source_path.write_text(source)
         partial = Path(workdir) / library.name
         result = subprocess.run(
-            _compile_command(compiler, source_path, partial), capture_output=True, text=True
+            _compile_command(compiler, source_path, partial, flags), capture_output=True, text=True
         )
         if result.returncode != 0:
             raise RuntimeError(f"compiling {name} failed: {result.stderr.strip()[:500]}")

@@ -207,7 +207,7 @@ EDGE_CASES = [
 ]
 HULL_BUG = pytest.mark.xfail(
     strict=True,
-    reason="ground_cone._friction_face: a data edge whose normal is within 3° above horizontal is cut "
+    reason="ground_cone._face_ends: a data edge whose normal is within 3° above horizontal is cut "
     "into polygon edges on the 0° and 5.6° directions; the 5.6° one pairs with the corner's next "
     "edge into a ≥3 N chord whose normal (~6°) passes FACE_COSINE_RANGE, so the side is fitted",
 )

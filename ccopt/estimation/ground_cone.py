@@ -31,6 +31,10 @@ sliding samples reported sticking; 0 % with world up). A tilted ground turns the
 with it, so the ground's tilt must stay well inside the 15° that separate a face from the top
 (tested to 15°; a ground tilted further than its friction angle cannot hold the object anyway).
 
+The polygon and the face search, the fit's data-dependent loops, run in C written for them
+(:mod:`.ground_hull`), bit for bit the Python here, which stays the reference and the fallback
+where no C compiler works.
+
 Rows are returned with unit normals ``a`` (so ``b − a·f`` is the distance to the face in N) in the
 order of :data:`ccopt.contact.GROUND_ROWS`. They are *valid* once ``min_samples`` forces have been
 seen. A side whose longest pair is shorter than ``min_face_length`` (no sliding seen that way yet)
@@ -52,6 +56,8 @@ import numpy as np
 
 from ccopt import validation
 from ccopt.clock import interval_passed
+from ccopt.estimation import ground_hull
+from ccopt.estimation.ground_hull import CompiledHull
 from ccopt.estimation.quantile import P2QuantileBank, check_count, check_level, check_number
 from ccopt.geometry import WORLD_UP
 
@@ -146,6 +152,15 @@ class GroundConeEstimator:
         self._last_fit = -math.inf
         self.cone = fit_ground_cone(self.directions, np.full(self.params.directions, np.nan), self.params, 0)
         self._fitted_to: tuple[bytes, bool, bool] | None = None  # what self.cone was fitted to
+        self._hull = compiled_hull(self.directions, self.params)  # None: fitted in Python
+
+    def __getstate__(self) -> dict:
+        """The state without the compiled face search (a copy or a pickle makes its own)."""
+        return {**self.__dict__, "_hull": None}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._hull = compiled_hull(self.directions, self.params)
 
     @property
     def sample_count(self) -> int:
@@ -176,21 +191,26 @@ class GroundConeEstimator:
         support, count = self._support.values, self.sample_count
         fitted_to = (support.tobytes(), count > 0, count >= self.params.min_samples)
         if fitted_to != self._fitted_to:
-            self.cone = fit_ground_cone(self.directions, support, self.params, count)
+            self.cone = fit_ground_cone(self.directions, support, self.params, count, self._hull)
             self._fitted_to = fitted_to
         return self.cone
 
 
 def fit_ground_cone(
-    directions: np.ndarray, support: np.ndarray, params: GroundConeParams, sample_count: int
+    directions: np.ndarray,
+    support: np.ndarray,
+    params: GroundConeParams,
+    sample_count: int,
+    hull: CompiledHull | None = None,
 ) -> GroundCone:
     """The ground rows from support values ``support[k] = h(directions[k])`` (see the module docstring).
 
     Before any force, or if the hull is beyond floating point (two adjacent support lines parallel,
     a corner or a face that overflows), the rows are the conservative prior about the origin and
-    not valid.
+    not valid. ``hull``, if given (:func:`compiled_hull` of these directions and ``params``), finds the
+    polygon's faces in C, bit for bit as here in Python.
     """
-    fit = _fit_rows(directions, support, params) if sample_count > 0 else None
+    fit = _fit_rows(directions, support, params, hull) if sample_count > 0 else None
     if fit is None:
         origin = [(0.0, 0.0)]
         rows = [_prior_row(WORLD_UP, params.mu_prior, side, origin) for side in (1.0, -1.0)]
@@ -199,35 +219,64 @@ def fit_ground_cone(
     return _cone(rows, sample_count >= params.min_samples, WORLD_UP, fitted)
 
 
+def compiled_hull(directions: np.ndarray, params: GroundConeParams) -> CompiledHull | None:
+    """The compiled face search of ``directions`` (K×2) and the prior rows of ``params``
+    (:mod:`~ccopt.estimation.ground_hull`), None where no C compiler works."""
+    geometry = _direction_set(directions)
+    normals = tuple(friction_face_normal(WORLD_UP, params.mu_prior, side) for side in (1.0, -1.0))
+    candidates = (geometry.candidates[0].of_direction, geometry.candidates[1].of_direction)
+    ux, uy, cosine = geometry.ux, geometry.uy, geometry.window_cosine
+    return ground_hull.compiled_hull(ux, uy, candidates, cosine, (normals[0], normals[1]))
+
+
 def _fit_rows(
-    directions: np.ndarray, support: np.ndarray, params: GroundConeParams
+    directions: np.ndarray, support: np.ndarray, params: GroundConeParams, hull: CompiledHull | None
 ) -> tuple[list[Row2], tuple[bool, bool]] | None:
     """The rows (friction faces where found, else prior rows touching the hull) and which are
     faces; None unless the support values, the hull's corners and the rows are all finite."""
-    if not np.isfinite(support).all():
-        return None
-    geometry = _direction_set(directions)
-    active, vertices = _polygon(geometry, support)
-    if not math.isfinite(sum([x + y for x, y in vertices])):
+    normals = tuple(friction_face_normal(WORLD_UP, params.mu_prior, side) for side in (1.0, -1.0))
+    if hull is not None:
+        found = hull.faces(support)
+    else:
+        found = _faces(_direction_set(directions), support, (normals[0], normals[1]))
+    if found is None:
         return None
     rows, fitted = [], []
-    for side, candidates in zip((1.0, -1.0), geometry.candidates, strict=True):
-        face = _friction_face(active, vertices, geometry, candidates)
+    for normal, ends, prior_offset in zip(normals, *found, strict=True):
+        face = _face_row(ends) if ends is not None else None
         fitted.append(face is not None and face[2] >= params.min_face_length)
-        rows.append(face if fitted[-1] else _prior_row(WORLD_UP, params.mu_prior, side, vertices))
+        rows.append(face if fitted[-1] else (normal, prior_offset, 0.0))
     if not math.isfinite(sum(normal[0] + normal[1] + offset for normal, offset, _ in rows)):
         return None
     return rows, (fitted[0], fitted[1])
 
 
+def _faces(
+    geometry: _DirectionSet, support: np.ndarray, prior_normals: tuple[tuple[float, float], ...]
+) -> tuple[tuple[FaceEnds | None, FaceEnds | None], tuple[float, float]] | None:
+    """``((right, left) faces' ends, (right, left) offsets of the prior rows of ``prior_normals``
+    touching the polygon)`` of the polygon of ``support`` (in Python what
+    :meth:`CompiledHull.faces <ccopt.estimation.ground_hull.CompiledHull.faces>` does in C); None
+    unless the support values and the polygon's vertices are finite."""
+    if not np.isfinite(support).all():
+        return None
+    active, vertices = _polygon(geometry, support)
+    if not math.isfinite(sum([x + y for x, y in vertices])):
+        return None
+    ends = tuple(_face_ends(active, vertices, geometry, candidates) for candidates in geometry.candidates)
+    offsets = tuple(max([nx * x + ny * y for x, y in vertices]) for nx, ny in prior_normals)
+    return (ends[0], ends[1]), (offsets[0], offsets[1])
+
+
 Row2 = tuple[tuple[float, float], float, float]
 """A ground row as ``(unit normal, offset (N), face length (N))``."""
+FaceEnds = ground_hull.FaceEnds
 
 
 @dataclass(frozen=True)
 class _Candidates:
     """The directions whose polygon edges may belong to the friction face on one side of world up
-    (:func:`_friction_face`): per direction, and as runs ``(first, last)`` of consecutive indices."""
+    (:func:`_face_ends`): per direction, and as runs ``(first, last)`` of consecutive indices."""
 
     of_direction: list[bool]
     runs: list[tuple[int, int]]
@@ -397,10 +446,11 @@ def friction_face_normal(up: tuple[float, float], mu: float, side: float) -> tup
     return (side * up[1] + mu * up[0]) / scale, (-side * up[0] + mu * up[1]) / scale
 
 
-def _friction_face(
+def _face_ends(
     active: list[int], vertices: list[tuple[float, float]], geometry: _DirectionSet, candidates: _Candidates
-) -> Row2 | None:
-    """The friction face on the side of ``candidates`` (right or left of world up) as a row, or None.
+) -> FaceEnds | None:
+    """The ends of the friction face on the side of ``candidates`` (right or left of world up), or
+    None (:func:`_face_row` makes them a row).
 
     Polygon edge ``i`` (from vertex ``i − 1`` to ``i``) lies on line ``active[i]``, its outward
     normal that direction. Seed: the longest pair of consecutive edges whose normals point to that
@@ -408,11 +458,9 @@ def _friction_face(
     sorted ``active`` on their runs). Noise lifts the support values most where the face is seen
     head-on, so the hull bulges slightly along a face and a straight face spans a few edges: the
     face is every consecutive edge whose normal is within :data:`FACE_WINDOW_STEPS` direction steps
-    of the seed chord's, and the row is the chord from the first one's start to the last one's end —
-    the face's ends.
+    of the seed chord's, and its ends are the first one's start and the last one's end.
     """
     count, candidate, ux, uy = len(active), candidates.of_direction, geometry.ux, geometry.uy
-    (up_x, up_y), (low, high) = WORLD_UP, FACE_COSINE_RANGE
     lengths = {  # of the candidate edges, by position, ascending
         index: math.dist(vertices[index - 1], vertices[index])
         for first_k, last_k in candidates.runs
@@ -437,14 +485,21 @@ def _friction_face(
         end += 1
     while end - start < count - 1 and extends(start - 1):
         start -= 1
-    ends = (vertices[(start - 1) % count], vertices[end % count])
+    return vertices[(start - 1) % count], vertices[end % count]
+
+
+def _face_row(ends: FaceEnds) -> Row2 | None:
+    """The row of a friction face's ``ends`` (:func:`_face_ends`): their chord, turned through the
+    origin where it crosses "up" below it (:func:`_through_origin`); None where the chord has no
+    length or its normal is outside :data:`FACE_COSINE_RANGE`."""
+    (up_x, up_y), (low, high) = WORLD_UP, FACE_COSINE_RANGE
     row = _chord(*ends)
     if row is not None and row[1] < 0.0:
         row = _through_origin(ends)
     return row if row is not None and low <= row[0][0] * up_x + row[0][1] * up_y <= high else None
 
 
-def _through_origin(ends: tuple[tuple[float, float], tuple[float, float]]) -> Row2 | None:
+def _through_origin(ends: FaceEnds) -> Row2 | None:
     """The face of a chord ``ends`` that crosses "up" below the origin: the line through the origin and
     the chord's end farther from it, in the chord's direction (so outward like the chord's own
     row, :func:`_chord`) and with the chord's length; None if that end is the origin.
