@@ -14,12 +14,14 @@ caches the library on disk by a hash of the source (``$CCOPT_CACHE_DIR``, else
 
 from __future__ import annotations
 
+import ctypes
 import hashlib
 import os
 import shutil
 import subprocess
 import tempfile
 import threading
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -192,6 +194,32 @@ def compile_function(
         generator.add(each)
     source = f"/* CasADi {ca.__version__} */\n{generator.dump()}"
     return compile_source(name or functions[0].name(), source, cache_dir, compiler, _casadi_flags())
+
+
+def load_c_function(
+    source: Path,
+    symbol: str,
+    argtypes: Sequence[type],
+    fallback: str,
+    cache_dir: Path | None = None,
+    compiler: str | None = None,
+) -> Callable | None:
+    """The function ``symbol`` of the C file ``source`` written by hand, compiled with
+    ``-ffp-contract=off`` (no fused multiply-add: the rounding of the Python it transcribes) by
+    :func:`compile_source` and loaded through ``ctypes`` (returning nothing). Where it cannot be
+    compiled, None, with a ``RuntimeWarning`` saying so and that the caller goes on with ``fallback``
+    (e.g. "fitting it in Python")."""
+    flags = ("-ffp-contract=off",)
+    try:
+        library, _ = compile_source(source.stem, source.read_text(), cache_dir, compiler, flags)
+    except (OSError, RuntimeError, subprocess.CalledProcessError) as error:
+        message = f"compiled {source.name} unavailable ({error}); {fallback}"
+        warnings.warn(message, RuntimeWarning, stacklevel=3)
+        return None
+    function = getattr(ctypes.CDLL(str(library)), symbol)
+    function.argtypes = list(argtypes)
+    function.restype = None
+    return function
 
 
 def compile_source(

@@ -9,7 +9,7 @@ import pickle
 import numpy as np
 import pytest
 
-from ccopt.estimation import p2_step
+from ccopt.estimation import p2_step, quantile
 from ccopt.estimation.quantile import P2Quantile, P2QuantileBank, marker_levels
 
 SAMPLES = 100_000
@@ -100,7 +100,7 @@ def test_bank_matches_numpy_and_skips_non_finite_rows():
 def test_a_copied_bank_goes_on_like_the_original(copy_bank):
     """A copy (e.g. an estimator's pickled state) steps its own arrays, to the bit as the original."""
     rng = np.random.default_rng(5)
-    bank = P2QuantileBank(0.9, 70)  # two blocks
+    bank = P2QuantileBank(0.9, 70)
     for _ in range(20):
         bank.add(rng.normal(size=70))
     copied = copy_bank(bank)
@@ -135,9 +135,9 @@ def test_bad_types_raise_type_error():
         P2QuantileBank(0.5, 0)
 
 
-def test_bank_equals_p2_bit_for_bit_over_blocks_and_signed_zeros():
-    """Two blocks of generated C (70 streams) against one P2Quantile per stream, every value and
-    its sign: samples rounded to a tenth give ties and −0.0."""
+def test_bank_equals_p2_bit_for_bit_with_ties_and_signed_zeros():
+    """70 streams stepped in C against one P2Quantile per stream, every value and its sign: samples
+    rounded to a tenth give ties and −0.0."""
     rng = np.random.default_rng(7)
     samples = np.round(rng.standard_t(3, (1500, 70)) * 0.3, 1)
     bank, scalars = P2QuantileBank(0.985, 70), [P2Quantile(0.985) for _ in range(70)]
@@ -152,13 +152,30 @@ def test_bank_equals_p2_bit_for_bit_over_blocks_and_signed_zeros():
     assert np.any((samples == 0.0) & np.signbit(samples))  # −0.0 among the samples
 
 
-def test_the_p2_step_without_a_compiler_runs_in_process_with_the_same_result(tmp_path):
-    with pytest.warns(RuntimeWarning, match="evaluating it in process"):
-        in_process = p2_step.p2_step(tmp_path, "no-such-cc")
+def test_a_bank_without_a_compiler_steps_in_python_with_the_same_result(tmp_path, monkeypatch):
+    with pytest.warns(RuntimeWarning, match="stepping the streams in Python"):
+        assert p2_step.p2_bank_step(tmp_path, "no-such-cc") is None
+    compiled = P2QuantileBank(0.9, 40)
+    monkeypatch.setattr(quantile, "p2_bank_step", lambda: None)
+    in_python = P2QuantileBank(0.9, 40)
     rng = np.random.default_rng(8)
-    heights = np.sort(rng.normal(size=(p2_step.BLOCK, 5)), axis=1)
-    positions = np.tile(np.array([0.0, 3.0, 6.0, 8.0, 9.0]), (p2_step.BLOCK, 1))
-    arguments = (heights.T, positions.T, rng.normal(size=(1, p2_step.BLOCK)), np.array(marker_levels(0.9)))
-    compiled = p2_step.p2_step()
-    for ours, theirs in zip(in_process(*arguments), compiled(*arguments), strict=True):
-        np.testing.assert_array_equal(ours, theirs)
+    for row in np.round(rng.standard_t(3, (600, 40)), 1):
+        compiled.add(row)
+        in_python.add(row)
+    assert compiled.values.tobytes() == in_python.values.tobytes()
+    assert compiled._positions.tobytes() == in_python._positions.tobytes()
+
+
+def test_bank_equals_p2_bit_for_bit_where_the_markers_differences_overflow():
+    """Samples spanning most of the float range, so the markers' differences overflow and the
+    steps fall back to their convex combinations."""
+    rng = np.random.default_rng(9)
+    samples = rng.choice([-1.0, 1.0], (800, 12)) * 1.7e308 * rng.uniform(0.5, 1.0, (800, 12))
+    samples[rng.uniform(size=samples.shape) < 0.3] = 0.5
+    bank, scalars = P2QuantileBank(0.6, 12), [P2Quantile(0.6) for _ in range(12)]
+    for row in samples:
+        bank.add(row)
+        for scalar, sample in zip(scalars, row.tolist(), strict=True):
+            scalar.add(sample)
+    assert np.isfinite(bank.values).all()
+    assert bank.values.tobytes() == np.array([s.value for s in scalars]).tobytes()

@@ -19,37 +19,24 @@ from __future__ import annotations
 
 import ctypes
 import functools
-import subprocess
-import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
 
-from ccopt.casadi_eval import compile_source
+from ccopt.casadi_eval import load_c_function
 
 SOURCE = Path(__file__).with_name("ground_hull.c")
-FLAGS = ("-ffp-contract=off",)
-"""Compile flags beyond ``-O3``: no fused multiply-add, whose single rounding would differ from
-Python's two."""
 _OUT = 14
 
 
 @functools.cache
-def _function(cache_dir: Path | None = None, compiler: str | None = None) -> ctypes._CFuncPtr | None:
+def _function(cache_dir: Path | None = None, compiler: str | None = None) -> Callable | None:
     """``ccopt_ground_hull`` of the compiled library, loaded once per process (None, with a warning,
     where it cannot be compiled)."""
-    try:
-        library, _ = compile_source("ccopt_ground_hull", SOURCE.read_text(), cache_dir, compiler, FLAGS)
-    except (OSError, RuntimeError, subprocess.CalledProcessError) as error:
-        warnings.warn(
-            f"compiled ground hull unavailable ({error}); fitting it in Python", RuntimeWarning, stacklevel=3
-        )
-        return None
-    function = ctypes.CDLL(str(library)).ccopt_ground_hull
-    function.restype = ctypes.c_int
-    function.argtypes = [ctypes.c_int, *[ctypes.c_void_p] * 5]
-    return function
+    arguments = [ctypes.c_int, *[ctypes.c_void_p] * 5]
+    fallback = "fitting it in Python"
+    return load_c_function(SOURCE, "ccopt_ground_hull", arguments, fallback, cache_dir, compiler)
 
 
 FaceEnds = tuple[tuple[float, float], tuple[float, float]]
@@ -76,7 +63,7 @@ class CompiledHull:
         candidates: tuple[Sequence[bool], Sequence[bool]],
         window_cosine: float,
         prior_normals: tuple[tuple[float, float], tuple[float, float]],
-        function: ctypes._CFuncPtr,
+        function: Callable,
     ) -> None:
         count = len(ux)
         self._count = count

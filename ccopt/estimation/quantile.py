@@ -12,17 +12,19 @@ ignored.
 
 :class:`P2Quantile` tracks one quantile of a scalar stream in plain Python floats (the fastest form
 for one stream); :class:`P2QuantileBank` tracks the same level of many streams that receive one
-sample each per step (e.g. support values in many directions), with the same results, in generated
-C (:mod:`ccopt.estimation.p2_step`).
+sample each per step (e.g. support values in many directions), with the same results, in C
+(:mod:`ccopt.estimation.p2_step`).
 """
 
 from __future__ import annotations
 
+import functools
 import math
+from collections.abc import Callable
 
 import numpy as np
 
-from ccopt.estimation.p2_step import BLOCK, N_MARKERS, advance
+from ccopt.estimation.p2_step import N_MARKERS, p2_bank_step
 from ccopt.validation import check_count, check_number
 
 
@@ -100,28 +102,32 @@ class P2Quantile:
             if self._count == N_MARKERS:
                 heights.sort()
             return
-        positions = self._positions
-        if sample < heights[0]:
-            heights[0] = float(sample)
-            cell = 0
-        elif sample >= heights[4]:
-            heights[4] = float(sample)
-            cell = 3
-        elif sample < heights[1]:
-            cell = 0
-        elif sample < heights[2]:
-            cell = 1
-        elif sample < heights[3]:
-            cell = 2
-        else:
-            cell = 3
-        for marker in range(cell + 1, N_MARKERS):
-            positions[marker] += 1.0
-        top, levels = positions[4], self._levels
-        for marker in (1, 2, 3):
-            lag = top * levels[marker] - positions[marker]
-            if lag >= 1.0 or lag <= -1.0:  # most samples move no marker: no call
-                _adjust_marker(heights, positions, marker, lag)
+        _step(heights, self._positions, self._levels, float(sample))
+
+
+def _step(heights: list[float], positions: list[float], levels: list[float], sample: float) -> None:
+    """One finite sample past the first five, in place on the markers' heights and positions."""
+    if sample < heights[0]:
+        heights[0] = sample
+        cell = 0
+    elif sample >= heights[4]:
+        heights[4] = sample
+        cell = 3
+    elif sample < heights[1]:
+        cell = 0
+    elif sample < heights[2]:
+        cell = 1
+    elif sample < heights[3]:
+        cell = 2
+    else:
+        cell = 3
+    for marker in range(cell + 1, N_MARKERS):
+        positions[marker] += 1.0
+    top = positions[4]
+    for marker in (1, 2, 3):
+        lag = top * levels[marker] - positions[marker]
+        if lag >= 1.0 or lag <= -1.0:  # most samples move no marker: no call
+            _adjust_marker(heights, positions, marker, lag)
 
 
 def _adjust_marker(heights: list[float], positions: list[float], marker: int, lag: float) -> None:
@@ -154,8 +160,8 @@ class P2QuantileBank:
     """The ``level`` quantile of ``size`` parallel streams, each fed one sample per :meth:`add`.
 
     The same algorithm as :class:`P2Quantile`, stream by stream, with the same results: the first
-    five samples here, then one call of generated C per :data:`~ccopt.estimation.p2_step.BLOCK`
-    streams (:mod:`ccopt.estimation.p2_step`).
+    five samples here, then one call of C per sample for every stream (:mod:`ccopt.estimation.p2_step`;
+    in Python, stream by stream, where no C compiler works).
 
     Args:
         level: the quantile level ``p ∈ (0, 1)``.
@@ -166,29 +172,37 @@ class P2QuantileBank:
         self.level = check_level(level)
         self.size = check_count("size", size)
         self._count = 0
-        padded = -(-self.size // BLOCK) * BLOCK  # whole blocks; the padding streams see zeros
-        self._heights = np.zeros((padded, N_MARKERS))  # stream by stream: a block is contiguous
-        self._positions = np.zeros((padded, N_MARKERS))
-        self._samples = np.zeros(padded)
+        self._heights = np.zeros((self.size, N_MARKERS))  # stream by stream
+        self._positions = np.zeros((self.size, N_MARKERS))
+        self._samples = np.zeros(self.size)
         self._levels = np.array(marker_levels(self.level))
-        self._blocks = self._block_views()
+        self._advance = self._bind()
 
-    def _block_views(self) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
-        """Per block, flat views of its heights and positions, and its samples (made once: slicing
-        and reshaping at every sample cost more than the copies)."""
-        return [
-            (self._heights[block].reshape(-1), self._positions[block].reshape(-1), self._samples[block])
-            for block in (slice(start, start + BLOCK) for start in range(0, len(self._samples), BLOCK))
-        ]
+    def _bind(self) -> Callable[[], None]:
+        """The step of every stream on this bank's arrays (their addresses bound once: a copy or a
+        pickle has arrays of its own and binds anew)."""
+        step = p2_bank_step()
+        if step is None:
+            return self._python_step
+        addresses = (a.ctypes.data for a in (self._heights, self._positions, self._samples, self._levels))
+        return functools.partial(step, self.size, *addresses)
+
+    def _python_step(self) -> None:
+        """:func:`_step` stream by stream in Python."""
+        levels, samples = self._levels.tolist(), self._samples.tolist()
+        for heights, positions, sample in zip(self._heights, self._positions, samples, strict=True):
+            values, places = heights.tolist(), positions.tolist()
+            _step(values, places, levels, sample)
+            heights[:], positions[:] = values, places
 
     def __getstate__(self) -> dict[str, object]:
         state = dict(self.__dict__)
-        del state["_blocks"]  # views would be unpickled as copies: made anew
+        del state["_advance"]  # bound to this bank's arrays: bound anew
         return state
 
     def __setstate__(self, state: dict[str, object]) -> None:
         self.__dict__.update(state)
-        self._blocks = self._block_views()
+        self._advance = self._bind()
 
     @property
     def count(self) -> int:
@@ -201,21 +215,20 @@ class P2QuantileBank:
         if self._count == 0:
             return np.full(self.size, np.nan)
         if self._count <= N_MARKERS:  # exact, as P2Quantile's
-            rows = np.sort(self._heights[: self.size, : self._count], axis=1).tolist()
+            rows = np.sort(self._heights[:, : self._count], axis=1).tolist()
             return np.array([exact_quantile(row, self.level) for row in rows])
-        return self._heights[: self.size, 2].copy()
+        return self._heights[:, 2].copy()
 
     def add(self, samples: np.ndarray) -> None:
         """Feed one sample per stream (float array of shape ``(size,)``); skipped if any is non-finite."""
         if not np.isfinite(samples).all():
             return
         self._count += 1
-        self._samples[: self.size] = samples
+        self._samples[:] = samples
         if self._count <= N_MARKERS:
             self._heights[:, self._count - 1] = self._samples
             if self._count == N_MARKERS:
                 self._heights.sort(axis=1)
                 self._positions[:] = np.arange(float(N_MARKERS))
             return
-        for heights, positions, block_samples in self._blocks:
-            advance(heights, positions, block_samples, self._levels)
+        self._advance()
