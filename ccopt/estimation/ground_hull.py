@@ -7,11 +7,12 @@ the fit is the estimator's slowest tick. ``ground_hull.c`` transcribes them line
 floating-point operations in the same order (built with ``-ffp-contract=off``, so no multiply-add is
 fused), so the polygon and the faces' ends are those of the Python reference bit for bit
 (:mod:`tests.test_ground_hull` holds it to that); :mod:`~ccopt.estimation.ground_cone` turns the
-ends into rows as before. Written by hand, not generated from CasADi symbols like the P² step
-(:mod:`~ccopt.estimation.p2_step`): the sweep's deque has no fixed-size branch-free form short of
-comparing every pair of lines, which costs more than the sweep and rounds differently.
+ends into rows as before. Written by hand, as the P² step is (:mod:`~ccopt.estimation.p2_step`),
+not generated from CasADi symbols like the controller's tick: the sweep's deque has no fixed-size
+branch-free form short of comparing every pair of lines, which costs more than the sweep and
+rounds differently.
 
-The library is compiled once and cached on disk (:func:`ccopt.casadi_eval.compile_source`); where
+The library is compiled once and cached on disk (:func:`ccopt.casadi_eval.load_c_function`); where
 no C compiler works, :func:`compiled_hull` warns and returns None, and the fit stays in Python.
 """
 
