@@ -96,17 +96,27 @@ def test_an_estimator_with_the_compiled_fit_estimates_as_one_fitting_in_python()
 
 @pytest.mark.parametrize("duplicate", [copy.deepcopy, lambda owner: pickle.loads(pickle.dumps(owner))])
 def test_a_copied_ground_hull_fits_with_buffers_of_its_own(duplicate):
+    """The original and its copy, fed different forces in turn, each fit as an estimator fitting in
+    Python fed the same history: neither reads the other's support values."""
     rng = np.random.default_rng(5)
-    original = GroundConeEstimator()
+    original, in_python = GroundConeEstimator(), GroundConeEstimator()
+    in_python._hull = None
     for k in range(300):
-        original.update(k * PARAMS.sample_interval, rng.normal((0.0, -10.0), 3.0))
-    twin = duplicate(original)
-    assert twin._hull is not None and twin._hull is not original._hull
-    for k in range(300, 400):
         force = rng.normal((0.0, -10.0), 3.0)
         original.update(k * PARAMS.sample_interval, force)
-        twin.update(k * PARAMS.sample_interval, force)
-        assert cone_bytes(twin.cone) == cone_bytes(original.cone)
+        in_python.update(k * PARAMS.sample_interval, force)
+    twin, twin_in_python = duplicate(original), copy.deepcopy(in_python)
+    assert twin._hull is not None and twin._hull is not original._hull
+    for k in range(300, 500):
+        time = k * PARAMS.sample_interval
+        ours, theirs = rng.normal((2.0, -10.0), 3.0), rng.normal((-2.0, -12.0), 4.0)
+        original.update(time, ours)
+        in_python.update(time, ours)
+        twin.update(time, theirs)
+        twin_in_python.update(time, theirs)
+        assert cone_bytes(original.cone) == cone_bytes(in_python.cone)
+        assert cone_bytes(twin.cone) == cone_bytes(twin_in_python.cone)
+    assert cone_bytes(twin.cone) != cone_bytes(original.cone)
 
 
 def test_without_a_compiler_the_hull_is_fitted_in_python_with_a_warning(tmp_path):

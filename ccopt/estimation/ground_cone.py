@@ -223,10 +223,16 @@ def compiled_hull(directions: np.ndarray, params: GroundConeParams) -> CompiledH
     """The compiled face search of ``directions`` (K×2) and the prior rows of ``params``
     (:mod:`~ccopt.estimation.ground_hull`), None where no C compiler works."""
     geometry = _direction_set(directions)
-    normals = tuple(friction_face_normal(WORLD_UP, params.mu_prior, side) for side in (1.0, -1.0))
     candidates = (geometry.candidates[0].of_direction, geometry.candidates[1].of_direction)
     ux, uy, cosine = geometry.ux, geometry.uy, geometry.window_cosine
-    return ground_hull.compiled_hull(ux, uy, candidates, cosine, (normals[0], normals[1]))
+    return ground_hull.compiled_hull(ux, uy, candidates, cosine, _prior_normals(params.mu_prior))
+
+
+@functools.lru_cache(maxsize=8)
+def _prior_normals(mu_prior: float) -> tuple[tuple[float, float], tuple[float, float]]:
+    """The prior rows' normals (:func:`friction_face_normal` about world up), right then left:
+    made once per ``μ_prior``, not at every fit."""
+    return friction_face_normal(WORLD_UP, mu_prior, 1.0), friction_face_normal(WORLD_UP, mu_prior, -1.0)
 
 
 def _fit_rows(
@@ -234,11 +240,8 @@ def _fit_rows(
 ) -> tuple[list[Row2], tuple[bool, bool]] | None:
     """The rows (friction faces where found, else prior rows touching the hull) and which are
     faces; None unless the support values, the hull's corners and the rows are all finite."""
-    normals = tuple(friction_face_normal(WORLD_UP, params.mu_prior, side) for side in (1.0, -1.0))
-    if hull is not None:
-        found = hull.faces(support)
-    else:
-        found = _faces(_direction_set(directions), support, (normals[0], normals[1]))
+    normals = _prior_normals(params.mu_prior)
+    found = hull.faces(support) if hull is not None else _faces(_direction_set(directions), support, normals)
     if found is None:
         return None
     rows, fitted = [], []
