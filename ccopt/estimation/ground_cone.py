@@ -150,7 +150,8 @@ class GroundConeEstimator:
         self._support = P2QuantileBank(self.params.level, self.params.directions)
         self._last_sample = -math.inf
         self._last_fit = -math.inf
-        self.cone = fit_ground_cone(self.directions, np.full(self.params.directions, np.nan), self.params, 0)
+        self._rows = _ground_rows(self.directions, np.full(self.params.directions, np.nan), self.params, 0)
+        self.cone = _cone(*self._rows)
         self._fitted_to: tuple[bytes, bool, bool] | None = None  # what self.cone was fitted to
         self._hull = compiled_hull(self.directions, self.params)  # None: fitted in Python
 
@@ -187,11 +188,16 @@ class GroundConeEstimator:
 
         The fit is a function of the support values and of whether any and ``min_samples`` forces
         were seen: while none of them changed (the values bit for bit: in a third to a half of the
-        fits of a closed-loop run no support value moved), the last cone is the fit."""
+        fits of a closed-loop run no support value moved), the last cone is the fit. Where the
+        support moved but the rows did not (the values moved away from both faces: about half of
+        the other fits), the last cone is kept too, the same object, so that what its users derive
+        from it stays theirs (the estimator's cone rows and kinematic modes)."""
         support, count = self._support.values, self.sample_count
         fitted_to = (support.tobytes(), count > 0, count >= self.params.min_samples)
         if fitted_to != self._fitted_to:
-            self.cone = fit_ground_cone(self.directions, support, self.params, count, self._hull)
+            rows = _ground_rows(self.directions, support, self.params, count, self._hull)
+            if rows != self._rows:
+                self.cone, self._rows = _cone(*rows), rows
             self._fitted_to = fitted_to
         return self.cone
 
@@ -210,13 +216,24 @@ def fit_ground_cone(
     not valid. ``hull``, if given (:func:`compiled_hull` of these directions and ``params``), finds the
     polygon's faces in C, bit for bit as here in Python.
     """
+    return _cone(*_ground_rows(directions, support, params, sample_count, hull))
+
+
+def _ground_rows(
+    directions: np.ndarray,
+    support: np.ndarray,
+    params: GroundConeParams,
+    sample_count: int,
+    hull: CompiledHull | None = None,
+) -> _Rows:
+    """The rows of :func:`fit_ground_cone`, before they are made a :class:`GroundCone`."""
     fit = _fit_rows(directions, support, params, hull) if sample_count > 0 else None
     if fit is None:
         origin = [(0.0, 0.0)]
-        rows = [_prior_row(WORLD_UP, params.mu_prior, side, origin) for side in (1.0, -1.0)]
-        return _cone(rows, False, WORLD_UP, (False, False))
+        right, left = (_prior_row(WORLD_UP, params.mu_prior, side, origin) for side in (1.0, -1.0))
+        return (right, left), False, (False, False)
     rows, fitted = fit
-    return _cone(rows, sample_count >= params.min_samples, WORLD_UP, fitted)
+    return rows, sample_count >= params.min_samples, fitted
 
 
 def compiled_hull(directions: np.ndarray, params: GroundConeParams) -> CompiledHull | None:
@@ -237,21 +254,30 @@ def _prior_normals(mu_prior: float) -> tuple[tuple[float, float], tuple[float, f
 
 def _fit_rows(
     directions: np.ndarray, support: np.ndarray, params: GroundConeParams, hull: CompiledHull | None
-) -> tuple[list[Row2], tuple[bool, bool]] | None:
+) -> tuple[tuple[Row2, Row2], tuple[bool, bool]] | None:
     """The rows (friction faces where found, else prior rows touching the hull) and which are
     faces; None unless the support values, the hull's corners and the rows are all finite."""
     normals = _prior_normals(params.mu_prior)
     found = hull.faces(support) if hull is not None else _faces(_direction_set(directions), support, normals)
     if found is None:
         return None
-    rows, fitted = [], []
-    for normal, ends, prior_offset in zip(normals, *found, strict=True):
-        face = _face_row(ends) if ends is not None else None
-        fitted.append(face is not None and face[2] >= params.min_face_length)
-        rows.append(face if fitted[-1] else (normal, prior_offset, 0.0))
-    if not math.isfinite(sum(normal[0] + normal[1] + offset for normal, offset, _ in rows)):
+    (right_ends, left_ends), (right_offset, left_offset) = found
+    right, right_fitted = _row(right_ends, normals[0], right_offset, params.min_face_length)
+    left, left_fitted = _row(left_ends, normals[1], left_offset, params.min_face_length)
+    if not math.isfinite((right[0][0] + right[0][1] + right[1]) + (left[0][0] + left[0][1] + left[1])):
         return None
-    return rows, (fitted[0], fitted[1])
+    return (right, left), (right_fitted, left_fitted)
+
+
+def _row(
+    ends: FaceEnds | None, prior_normal: tuple[float, float], prior_offset: float, min_length: float
+) -> tuple[Row2, bool]:
+    """One side's row and whether it is the friction face (:func:`_face_row` of ``ends`` at least
+    ``min_length`` long), else the prior row of ``prior_normal`` at ``prior_offset``."""
+    face = _face_row(ends) if ends is not None else None
+    if face is not None and face[2] >= min_length:
+        return face, True
+    return (prior_normal, prior_offset, 0.0), False
 
 
 def _faces(
@@ -273,6 +299,8 @@ def _faces(
 
 Row2 = tuple[tuple[float, float], float, float]
 """A ground row as ``(unit normal, offset (N), face length (N))``."""
+_Rows = tuple[tuple[Row2, Row2], bool, tuple[bool, bool]]
+"""A fit's ``(rows (right, left), valid, fitted)``, what :func:`_cone` makes a :class:`GroundCone` of."""
 FaceEnds = ground_hull.FaceEnds
 
 
@@ -405,9 +433,10 @@ def _outside(ux: list[float], uy: list[float], h: list[float], k: int, point: tu
     return ux[k] * point[0] + uy[k] * point[1] > h[k]
 
 
-def _cone(rows: list[Row2], valid: bool, up: tuple[float, float], fitted: tuple[bool, bool]) -> GroundCone:
+def _cone(rows: tuple[Row2, Row2], valid: bool, fitted: tuple[bool, bool]) -> GroundCone:
+    """The :class:`GroundCone` of a fit's rows (:func:`_ground_rows`)."""
     ((ax, ay), b_pos, _), ((cx, cy), b_neg, _) = rows
-    mu_g, apex = math.nan, (math.nan, math.nan)
+    mu_g, apex, up = math.nan, (math.nan, math.nan), WORLD_UP
     axis = math.hypot(ax + cx, ay + cy)  # of the faces' bisector, the cone's axis
     half_angle = 0.5 * math.acos(max(-1.0, min(1.0, ax * cx + ay * cy)))
     if fitted[0] and fitted[1] and axis > 0.0 and half_angle > 0.0:  # not a hull of zero width
