@@ -203,12 +203,13 @@ def load_c_function(
     fallback: str,
     cache_dir: Path | None = None,
     compiler: str | None = None,
+    restype: type | None = None,
 ) -> Callable | None:
     """The function ``symbol`` of the C file ``source`` written by hand, compiled with
     ``-ffp-contract=off`` (no fused multiply-add: the rounding of the Python it transcribes) by
-    :func:`compile_source` and loaded through ``ctypes`` (returning nothing). Where it cannot be
-    compiled, None, with a ``RuntimeWarning`` saying so and that the caller goes on with ``fallback``
-    (e.g. "fitting it in Python")."""
+    :func:`compile_source` and loaded through ``ctypes``, returning ``restype`` (None: nothing).
+    Where it cannot be compiled, None, with a ``RuntimeWarning`` saying so and that the caller goes
+    on with ``fallback`` (e.g. "fitting it in Python")."""
     flags = ("-ffp-contract=off",)
     try:
         library, _ = compile_source(source.stem, source.read_text(), cache_dir, compiler, flags)
@@ -218,7 +219,7 @@ def load_c_function(
         return None
     function = getattr(ctypes.CDLL(str(library)), symbol)
     function.argtypes = list(argtypes)
-    function.restype = None
+    function.restype = restype
     return function
 
 

@@ -179,3 +179,28 @@ def test_bank_equals_p2_bit_for_bit_where_the_markers_differences_overflow():
             scalar.add(sample)
     assert np.isfinite(bank.values).all()
     assert bank.values.tobytes() == np.array([s.value for s in scalars]).tobytes()
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+@pytest.mark.parametrize("at", [2, 5, 40])
+def test_a_row_with_one_non_finite_sample_changes_nothing(compiled, at, monkeypatch):
+    """A row with one NaN or infinity among finite samples is skipped whole, in the first five samples
+    and past them (where the compiled step checks it), with C and in Python: the bank then goes on
+    as one that never saw the row, to the bit."""
+    if not compiled:
+        monkeypatch.setattr(quantile, "p2_bank_step", lambda: None)
+    rng = np.random.default_rng(at)
+    rows = rng.normal(size=(60, 9))
+    bank, clean = P2QuantileBank(0.9, 9), P2QuantileBank(0.9, 9)
+    for k, row in enumerate(rows):
+        if k == at:
+            for bad in (math.nan, math.inf, -math.inf):
+                spoiled = row.copy()
+                spoiled[k % 9] = bad
+                bank.add(spoiled)
+                assert bank.count == clean.count
+        bank.add(row)
+        clean.add(row)
+    assert bank.count == clean.count == len(rows)
+    assert bank.values.tobytes() == clean.values.tobytes()
+    assert bank._positions.tobytes() == clean._positions.tobytes()

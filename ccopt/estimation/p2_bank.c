@@ -46,10 +46,14 @@ static void adjust_marker(double *heights, double *positions, int marker, double
     positions[marker] += step;
 }
 
-/* One finite sample per stream for streams that have seen five or more: heights and positions
- * (streams x 5, stream by stream) in place, samples (streams), levels (5, the markers'). */
-void ccopt_p2_bank(int streams, double *heights_all, double *positions_all, const double *samples,
-                   const double *levels) {
+/* One sample per stream for streams that have seen five or more: heights and positions
+ * (streams x 5, stream by stream) in place, samples (streams), levels (5, the markers'). Returns 1,
+ * or 0 and changes nothing where a sample is not finite (P2QuantileBank.add skips such a row). */
+int ccopt_p2_bank(int streams, double *heights_all, double *positions_all, const double *samples,
+                  const double *levels) {
+    for (int i = 0; i < streams; i++) {
+        if (!isfinite(samples[i])) return 0;
+    }
     for (int i = 0; i < streams; i++) {
         double *heights = heights_all + MARKERS * i, *positions = positions_all + MARKERS * i;
         double sample = samples[i];
@@ -76,4 +80,5 @@ void ccopt_p2_bank(int streams, double *heights_all, double *positions_all, cons
             if (lag >= 1.0 || lag <= -1.0) adjust_marker(heights, positions, marker, lag);
         }
     }
+    return 1;
 }

@@ -28,8 +28,8 @@ SOURCE = Path(__file__).with_name("p2_bank.c")
 def p2_bank_step(cache_dir: Path | None = None, compiler: str | None = None) -> Callable | None:
     """``ccopt_p2_bank(streams, heights, positions, samples, levels)``, loaded once per process:
     heights and positions ``(streams, 5)`` C-contiguous, stepped in place, samples ``(streams,)``,
-    levels the markers' (5), each passed as its address; None, with a warning, where it cannot be
-    compiled."""
+    levels the markers' (5), each passed as its address; it returns 1, or 0 having changed nothing
+    where a sample is not finite. None, with a warning, where it cannot be compiled."""
     arguments = [ctypes.c_int, *[ctypes.c_void_p] * 4]
     fallback = "stepping the streams in Python"
-    return load_c_function(SOURCE, "ccopt_p2_bank", arguments, fallback, cache_dir, compiler)
+    return load_c_function(SOURCE, "ccopt_p2_bank", arguments, fallback, cache_dir, compiler, ctypes.c_int)

@@ -178,22 +178,26 @@ class P2QuantileBank:
         self._levels = np.array(marker_levels(self.level))
         self._advance = self._bind()
 
-    def _bind(self) -> Callable[[], None]:
-        """The step of every stream on this bank's arrays (their addresses bound once: a copy or a
-        pickle has arrays of its own and binds anew)."""
+    def _bind(self) -> Callable[[], int]:
+        """The step of every stream on this bank's arrays with the samples in ``_samples`` (their
+        addresses bound once: a copy or a pickle has arrays of its own and binds anew); it returns 1,
+        or 0 having changed nothing where a sample is not finite."""
         step = p2_bank_step()
         if step is None:
             return self._python_step
         addresses = (a.ctypes.data for a in (self._heights, self._positions, self._samples, self._levels))
         return functools.partial(step, self.size, *addresses)
 
-    def _python_step(self) -> None:
-        """:func:`_step` stream by stream in Python."""
+    def _python_step(self) -> int:
+        """:func:`_step` stream by stream in Python (what the C does)."""
         levels, samples = self._levels.tolist(), self._samples.tolist()
+        if not all(math.isfinite(sample) for sample in samples):
+            return 0
         for heights, positions, sample in zip(self._heights, self._positions, samples, strict=True):
             values, places = heights.tolist(), positions.tolist()
             _step(values, places, levels, sample)
             heights[:], positions[:] = values, places
+        return 1
 
     def __getstate__(self) -> dict[str, object]:
         state = dict(self.__dict__)
@@ -220,15 +224,16 @@ class P2QuantileBank:
         return self._heights[:, 2].copy()
 
     def add(self, samples: np.ndarray) -> None:
-        """Feed one sample per stream (float array of shape ``(size,)``); skipped if any is non-finite."""
-        if not np.isfinite(samples).all():
+        """Feed one sample per stream (float array of shape ``(size,)``); skipped if any is non-finite
+        (checked by the step itself past the first five samples)."""
+        self._samples[:] = samples
+        if self._count >= N_MARKERS:
+            self._count += self._advance()
+            return
+        if not np.isfinite(self._samples).all():
             return
         self._count += 1
-        self._samples[:] = samples
-        if self._count <= N_MARKERS:
-            self._heights[:, self._count - 1] = self._samples
-            if self._count == N_MARKERS:
-                self._heights.sort(axis=1)
-                self._positions[:] = np.arange(float(N_MARKERS))
-            return
-        self._advance()
+        self._heights[:, self._count - 1] = self._samples
+        if self._count == N_MARKERS:
+            self._heights.sort(axis=1)
+            self._positions[:] = np.arange(float(N_MARKERS))
