@@ -33,7 +33,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ccopt import __version__, config, objects, record
+# ``ccopt plot`` imports only what drawing a run needs: the settings (ccopt.config) and the object
+# library are imported by the commands that use them.
+from ccopt import __version__, record
 from ccopt.cliutil import (
     OneLineParser,
     fail,
@@ -245,6 +247,8 @@ def run_settings(args: argparse.Namespace) -> tuple[dict[str, object], dict[tupl
     """The settings mapping of ``ccopt run`` (:mod:`ccopt.config`, SI): the ``--config`` file's, with the
     flags given put in; and what to call each value a flag set in a message (the flag and its text).
     ``--object`` and ``--vertices`` replace the file's object, ``--mass`` and the others change it."""
+    from ccopt import config
+
     settings = config.read_file(args.config) if args.config is not None else {}
     labels: dict[tuple[str, ...], str] = {}
     given: dict[tuple[str, ...], object] = {}
@@ -284,7 +288,7 @@ def run_settings(args: argparse.Namespace) -> tuple[dict[str, object], dict[tupl
 
 def _command_run(args: argparse.Namespace, prog: str) -> int:
     with stops_held():  # an interrupted C extension's import fails with an ImportError
-        from ccopt import experiment
+        from ccopt import config, experiment
 
     try:
         settings, labels = run_settings(args)
@@ -548,6 +552,8 @@ def _command_plot(args: argparse.Namespace, prog: str) -> int:
 
 def _command_objects(args: argparse.Namespace, prog: str) -> int:
     """List the object library: faces, face lengths, size, mass and friction."""
+    from ccopt import objects
+
     rows = []
     for name in objects.OBJECT_NAMES:
         obj = objects.make_object(name)

@@ -23,16 +23,18 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ccopt import statics
-from ccopt.control.targets import estimated_statics
-from ccopt.estimation.estimator import Estimate
-from ccopt.hand import Hand
 from ccopt.modes import Motion
-from ccopt.objects import PlanarObject
-from ccopt.plant.base import StartConfig
+
+if TYPE_CHECKING:  # the statics are imported where the maps are computed, not to draw them
+    from ccopt import statics
+    from ccopt.estimation.estimator import Estimate
+    from ccopt.hand import Hand
+    from ccopt.objects import PlanarObject
+    from ccopt.plant.base import StartConfig
 
 MOTIONS = (
     Motion.PIVOT,
@@ -137,6 +139,8 @@ def margins(
 ) -> np.ndarray:
     """Margins (k, n, m) of :data:`MOTIONS` over the grid, ``statics_of(motion)`` giving the statics
     each motion is judged on (None: NaN everywhere)."""
+    from ccopt import statics
+
     out = np.full((len(MOTIONS), len(thetas), len(s_hs)), math.nan)
     for k, motion in enumerate(MOTIONS):
         known = statics_of(motion)
@@ -167,6 +171,9 @@ def of_run(
     :func:`ccopt.planning.tour.vertex_range`); an estimated ground slide whose friction face is not
     known is sought ``slide_beyond`` (N) past the sticking forces seen, as the run's planner sought
     it (:func:`ccopt.control.targets.estimated_statics`)."""
+    from ccopt import statics
+    from ccopt.control.targets import estimated_statics
+
     truth = statics.true_statics(obj, start, hand)
     usable = estimate is not None and estimate.kinematics_valid
     centre = float(estimate.s_h) if usable else truth.s_h

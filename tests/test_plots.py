@@ -1,5 +1,7 @@
 """The figures draw what the record holds, in degrees and mm, and survive empty records."""
 
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -264,6 +266,43 @@ def test_animation_scene_puts_the_hand_on_the_object_face(run):
         normal = geometry.hand_normal(run["true_hand_pose"][i, 2])
         np.testing.assert_allclose((top - end_a) @ normal, 0.0, atol=1e-12)
         np.testing.assert_allclose((end_b - end_a) @ normal, 0.0, atol=1e-12)
+
+
+def test_ccopt_plot_of_a_run_writes_all_five_figures(tmp_path, capsys):
+    """``ccopt plot`` of a run folder (the stills drawn in this process, the GIF and the feasibility map
+    in its forked worker) lists the five figures, each an image PIL reads whole."""
+    from ccopt import cli
+
+    folder = tmp_path / "run"
+    run = ["run", "--schedule", "smoke", "--max-sim-s", "1", "--no-figures", "--no-progress"]
+    assert cli.main([*run, "--out", str(folder)]) == 3  # the time limit ran out
+    capsys.readouterr()
+    assert cli.main(["plot", str(folder)]) == 0
+    names = [*plots.FIGURES, "animation.gif", "feasibility_map.png"]
+    assert capsys.readouterr().out.splitlines() == ["figures: " + ", ".join(str(folder / n) for n in names)]
+    for name in names:
+        with Image.open(folder / name) as image:
+            image.verify()
+
+
+def test_drawing_a_run_leaves_the_settings_and_the_estimation_unimported():
+    """What ``ccopt plot`` imports before it forks its worker, and what the worker imports to draw the
+    feasibility map, leaves out the run settings, the statics, the estimator and the controller: only
+    running (and computing the maps) needs them."""
+    code = (
+        "import sys, ccopt.cli, ccopt.plots, ccopt.feasibility_map; "
+        "print(*sorted(m for m in sys.modules if m.split('.')[:2] in "
+        "(['ccopt', 'config'], ['ccopt', 'statics'], ['ccopt', 'estimation'], ['ccopt', 'control'])))"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.strip() == ""
+    control = subprocess.run(
+        [sys.executable, "-c", code.replace("ccopt.cli", "ccopt.experiment")],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    assert "ccopt.statics" in control.stdout.split()  # the check sees an import where there is one
 
 
 def test_write_figures_writes_images_pil_can_open(tmp_path):
