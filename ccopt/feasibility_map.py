@@ -216,7 +216,9 @@ def draw(fmap: FeasibilityMap, path: str | Path | None = None, title: str = "", 
     rows = len(fmap.motions)
     figure = Figure(figsize=(8.0, 2.0 * rows + 0.8))
     FigureCanvasAgg(figure)
-    axes = figure.subplots(rows, 2, sharex=True, sharey=True, squeeze=False)
+    # not shared: every panel has the grid's extent, and shared axes would pass each panel's limits on
+    # to the nine others (a tenth of the figure's time); the inner panels' tick labels hidden instead
+    axes = figure.subplots(rows, 2, squeeze=False)
     extent = (
         math.degrees(fmap.theta_o[0]), math.degrees(fmap.theta_o[-1]), 1e3 * fmap.s_h[0], 1e3 * fmap.s_h[-1]
     )
@@ -239,6 +241,7 @@ def draw(fmap: FeasibilityMap, path: str | Path | None = None, title: str = "", 
             # y given: where Matplotlib would place it (nothing is above a panel), without measuring
             # every panel's hidden tick labels to find out (a tenth of the figure's time)
             ax.set_title(f"{motion}, {label}", fontsize=9, y=1.0)
+            ax.tick_params(labelbottom=k == rows - 1, labelleft=column == 0)
             if column == 0:
                 ax.set_ylabel(r"$s_h$ (mm)")
     for ax in axes[-1]:

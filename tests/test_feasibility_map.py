@@ -79,6 +79,26 @@ def test_the_figure_is_drawn_for_a_run_without_estimate(tmp_path) -> None:
     assert path.stat().st_size > 10_000
 
 
+def test_every_panel_shows_the_grid_and_only_the_outer_ones_label_their_ticks(
+    run: experiment.Experiment,
+) -> None:
+    """The panels are not shared axes (sharing passes every limit change on to the nine others), yet
+    each shows the whole grid, θ_o in degrees and s_h in mm, and tick labels only along the left column
+    and the bottom row, as shared axes would."""
+    fmap = run.feasibility_map
+    figure = feasibility_map.draw(fmap)
+    figure.canvas.draw()
+    panels = [ax for ax in figure.axes if ax.get_label() != "<colorbar>"]
+    assert len(panels) == 2 * len(fmap.motions)
+    extent = (np.degrees(fmap.theta_o[[0, -1]]), 1e3 * fmap.s_h[[0, -1]])
+    for k, ax in enumerate(panels):
+        row, column = divmod(k, 2)
+        np.testing.assert_allclose(ax.get_xlim(), extent[0])
+        np.testing.assert_allclose(ax.get_ylim(), extent[1])
+        labelled = [bool(axis.get_ticklabels()) for axis in (ax.xaxis, ax.yaxis)]  # the visible ones
+        assert labelled == [row == len(fmap.motions) - 1, column == 0], k
+
+
 def test_an_unreadable_map_file_is_a_value_error_naming_it(tmp_path) -> None:
     (tmp_path / feasibility_map.FILE_NAME).write_bytes(b"not a zip")
     with pytest.raises(ValueError, match=r"feasibility_map\.npz"):
