@@ -461,6 +461,9 @@ UNCHANGED = 255
 """The GIF's palette index of a pixel that did not change since the frame before (transparent)."""
 NICE_SPEEDS = (1, 2, 3, 5, 10, 20, 30, 50, 100)
 """Playback speeds (× simulated time) the GIF chooses from."""
+MAX_FRAMES = 60
+"""The GIF's frames at most: a ``paper`` run (28.5 s) plays at 5× in 58 frames, half a second of the
+run a frame (at 120, 3× in 96 frames; each frame takes about 2 ms to draw and write)."""
 
 
 def playback(duration: float, max_frames: int) -> tuple[float, int]:
@@ -582,7 +585,7 @@ def _frame_geometry(frame: replay.Frame) -> dict[str, np.ndarray | None]:
     return {key: (force if key == "force" else getattr(frame, key)) for key, _ in ARTISTS}
 
 
-def animation(run: Run, path: str | Path, max_frames: int = 120) -> Path:
+def animation(run: Run, path: str | Path, max_frames: int = MAX_FRAMES) -> Path:
     """Write a GIF of the run to ``path`` (640 × 400 px) and return it (cf. the paper's Fig. 5). The
     true object and hand, the ground, the true (black) and estimated (blue) ground contact and contact
     geometry, the estimated hand (blue) and ground (purple) friction cones and the true ones (dashed),

@@ -322,7 +322,7 @@ def test_write_figures_writes_images_pil_can_open(tmp_path):
     with Image.open(paths[-1]) as gif:
         assert gif.width >= 640
         shown = [gif.seek(k) or gif.info["duration"] for k in range(gif.n_frames)]
-    speed, count = plots.playback(duration, 120)
+    speed, count = plots.playback(duration, plots.MAX_FRAMES)
     assert len(shown) == count and set(shown) == {1000 * plots.FRAME_S}
     # playback proportional to simulated time: the GIF lasts the run's time over the stated speed
     assert abs(sum(shown) / 1000 * speed - duration) <= speed * plots.FRAME_S
