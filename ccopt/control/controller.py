@@ -95,6 +95,15 @@ class ControllerParams:
         ground_margin: margin on the ground rows, N.
         min_margin: lower bound of the hand-row margins, N (× ``l_h`` for torques).
         d_guess: ``d`` of the naive ``v_θ`` before the kinematics are known, m.
+        naive_force_lag: the tangential force (N) a pivot about the naive ``v_θ`` may build up before
+            the normal- and tangential-force terms catch it. The naive lever is off the true one by
+            up to about ``d_guess``, so each radian turned about it strains the hand's translational
+            impedance ``k`` by that much; the force terms correct a ``force_rate`` share of the error
+            per second, so turning at ``ω`` lags ``k d_guess ω / force_rate`` behind. A pivot about
+            the naive lever is paced to ``ω = naive_force_lag · force_rate / (k · d_guess)`` (4.8°/s
+            on the default hand). Turned at the full speed, the goals study's first 7.2° exploration
+            pivots built 5–8 N of tangential force and slid the hand in 18 of 80 trials (12 more
+            rolled it); paced, none slid and one rolled.
         max_speed: largest impedance-target speed ``|Δn|, |Δt|`` (m/s) and ``|Δθ|`` (rad/s).
         slide_speed: largest impedance-target speed ``|Δn|, |Δt|`` (m/s) while a slide is commanded
             (hand or ground), below ``max_speed`` where smaller. A slide is a quasi-static motion: driven
@@ -144,6 +153,7 @@ class ControllerParams:
     ground_margin: float = 0.5
     min_margin: float = 0.2
     d_guess: float = 0.08
+    naive_force_lag: float = 2.0
     max_speed: tuple[float, float, float] = (
         0.002 / PAPER_PERIOD,
         0.002 / PAPER_PERIOD,
@@ -164,7 +174,15 @@ class ControllerParams:
     force_unit: float = 1.0
 
     def __post_init__(self) -> None:
-        for name in ("regularization", "convergence_rate", "force_rate", "d_guess", "normal_force"):
+        positive = (
+            "regularization",
+            "convergence_rate",
+            "force_rate",
+            "d_guess",
+            "normal_force",
+            "naive_force_lag",
+        )
+        for name in positive:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise ValueError(f"{name} must be positive, got {value!r}")
@@ -358,6 +376,7 @@ class Controller:
         self._slide_max_step = self._max_step.copy()
         self._slide_max_step[:2] = np.minimum(self._max_step[:2], self.params.slide_speed * self.period)
         self._max_steps = {False: self._max_step.tolist(), True: self._slide_max_step.tolist()}
+        self._naive_turn_error = self.naive_turn_speed * self.period / self._convergence
         f_min, f_max = self.hand.force_limits
         self._force_bounds = np.array([f_max - self.params.force_headroom, -f_min])
         p = self.params
@@ -398,6 +417,13 @@ class Controller:
         )
 
     @property
+    def naive_turn_speed(self) -> float:
+        """How fast (rad/s) a pivot about the naive ``v_θ`` turns at most
+        (:attr:`ControllerParams.naive_force_lag`)."""
+        p = self.params
+        return p.naive_force_lag * p.force_rate / (max(self.hand.stiffness[:2]) * p.d_guess)
+
+    @property
     def step_units(self) -> np.ndarray:
         """The units of the QP's variable ``y`` (m, m, rad): the target change is ``Δx = step_units · y``."""
         return self._units.copy()
@@ -407,7 +433,10 @@ class Controller:
 
         A step the solver returns that is not finite gives no change (the target holds), ``solved``
         False and a solution flagged infeasible with infinite slack: never a NaN for the plant. A step
-        beyond the speed limit is scaled down to it, and the solution reported is the scaled step's."""
+        beyond the speed limit is scaled down to it, and the solution reported is the scaled step's.
+        A pivot about the naive ``v_θ`` is paced (:meth:`_paced`)."""
+        if command.motion is Motion.PIVOT and not (math.isfinite(state.s_h) and math.isfinite(state.d)):
+            command = self._paced(state, command)
         if self._tick is not None:
             return self._compiled_update(state, command)
         instance = self.build_instance(state, command)
@@ -422,6 +451,19 @@ class Controller:
             solution = _scaled(solution, instance, 1.0 / excess)
         solved = {"step": step, "solution": solution, "packed": instance.packed, "solved": True}
         return validation.trusted(ControlOutput, solved)
+
+    def _paced(self, state: ControlInput, command: Command) -> Command:
+        """``command`` with its ``θ_o`` target at most as far from ``θ_o`` as the convergence term
+        turns in a tick at :attr:`naive_turn_speed`: a pivot about the naive lever turns no faster
+        than its force terms keep up with (:attr:`ControllerParams.naive_force_lag`)."""
+        theta = float(state.coordinates[modes.THETA_O])
+        error = float(command.targets[modes.THETA_O]) - theta
+        limit = self._naive_turn_error
+        if abs(error) <= limit:
+            return command
+        targets = np.array(command.targets, dtype=float)
+        targets[modes.THETA_O] = theta + math.copysign(limit, error)
+        return validation.trusted(Command, {**vars(command), "targets": targets})
 
     @staticmethod
     def _held(instance: QPInstance, backend: str) -> ControlOutput:
