@@ -1,9 +1,14 @@
 """A hand that gives in a goal's ground slide, in closed loop, against the simulator's truth.
 
-A goals-study quadrilateral (trial 20: μ_h 0.61, μ_g 0.51, 0.55 kg): its first ground slide towards
-−s_g, tried at a 9.6° tilt, slides the hand 7–10 mm along the face instead. Taken as the ground's
-slide (the rigid following), it moved ŝ_g 9.7 mm while the ground stayed, and the goal was claimed
-reached 10 mm off (:class:`~ccopt.estimation.kinematics.KinematicsParams` ``hand_slide_height``).
+A goals-study triangle (seed 1, trial 26: μ_h 0.30, μ_g 0.60, 0.82 kg): its first goal (24.4° and
+``s_g`` +10 mm) tries its first ground slide, towards +s_g, at 17.1°, and slides the hand 6.8 mm
+along the face instead, the ground not at all. Taken as the ground's slide (the rigid following,
+``hand_slide_height`` out of reach), it moved ŝ_g 8.4 mm while the ground stayed and the hand slid
+10.3 mm, and the goal was claimed reached 9.4 mm off (:class:`~ccopt.estimation.kinematics.KinematicsParams`
+``hand_slide_height``). With it, the slide ends slipped and the goal is reached 1.0 mm off.
+(The quadrilateral of seed 0's trial 20, this test's case before the exploration's pivots about
+the naive lever were paced, no longer makes the case: with 24 of 25 noise seeds (0–24) its first
+ground slide towards −s_g ends ``lost``, the kinematics let go.)
 """
 
 from __future__ import annotations
@@ -16,26 +21,25 @@ from ccopt.experiment import run_experiment
 from ccopt.objects import from_vertices
 from ccopt.schedule import Schedule, exploration, reach
 
-QUADRILATERAL = dict(
+TRIANGLE = dict(
     vertices=np.array(
         [
-            [0.06092450841862059, 0.017956036744612703],
-            [-0.054390586401792375, 0.02238871025425533],
-            [-0.041529000312690106, -0.04263493914781402],
-            [0.048413748457623536, -0.03672457489295697],
+            [-0.018708514415597483, 0.04248211066331846],
+            [-0.021470061215060964, -0.043988777409537265],
+            [0.042937109425731486, -0.007973796048556239],
         ]
     ),
-    mass=0.5524306686894425,
-    mu_hand=0.61482827730131,
-    mu_ground=0.5062465194007363,
+    mass=0.8164616566918732,
+    mu_hand=0.30113805656004133,
+    mu_ground=0.5977431914959821,
 )
 
 
 @pytest.fixture(scope="module")
 def run():
-    schedule = Schedule("hand-gives", (*exploration(), reach(s_g_mm=-10.0)))
-    obj = from_vertices(**QUADRILATERAL)
-    return run_experiment(obj, schedule, LoopParams(plant="planar"), seed=2613302452)
+    schedule = Schedule("hand-gives", (*exploration(), reach(theta_deg=24.388733853924695, s_g_mm=10.0)))
+    obj = from_vertices(**TRIANGLE)
+    return run_experiment(obj, schedule, LoopParams(plant="planar"), seed=3089512140)
 
 
 def test_a_ground_slide_whose_hand_slides_instead_ends_slipped_and_the_estimate_follows_the_hand(run):
