@@ -27,11 +27,13 @@ and the experimenter's oracle (the planner on the true object). Goals-study obje
   goal ``s_g`` −10 mm was claimed with the object where it began. The moment balance gives the
   hand's position on the face (:meth:`ccopt.estimation.estimator.Estimator._check_hand_give`;
   seed 7).
-* **A hand's slide taken for the ground's friction.** A ground slide at 10° slid the hand 7.7 mm
-  along the face in 3 s, the ground not at all; before the kinematics were let go, ``ŝ_g`` had
-  moved, and the ground counted as seen sliding: the hand's friction limit became the ground's
-  friction face (``μ̂_g`` 0.29 against 0.69), and the goal was reported unreachable
-  (:meth:`ccopt.estimation.estimator.Estimator._drop_unfounded_slide`; seed 6).
+* **A hand's slide taken for the ground's friction.** A ground slide at 10° slid the hand 4.8 mm
+  along the face in 2.7 s, the ground not at all; before the kinematics were let go, ``ŝ_g`` had
+  moved, and the ground counted as seen sliding towards −s_g: the hand's friction limit became the
+  ground's friction face there (``μ̂_g`` 0.37 against 0.69), and the goal was reported unreachable
+  (:meth:`ccopt.estimation.estimator.Estimator._drop_unfounded_slide`; seed 6, trial 34, run with
+  noise seed 10: since the exploration's pivots about the naive lever were paced, the trial's own
+  noise seed no longer makes the case, and of noise seeds 0–39 only 10 does).
 * **A roll over the face's end, unseen.** A sliver's ground slides with the hand 9 mm past the
   ground contact moved the centre of pressure to the face's end, well inside the hand, and the
   object turned 17° under the hand with the hand's torque rows far from tight
@@ -215,14 +217,14 @@ def test_a_lost_ground_slide_that_slid_the_hand_teaches_nothing_of_the_ground(
     dropped: bool, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """The case: a ground slide of the ``s_g`` goal ended ``lost`` with the hand moved 3 mm or more
-    along the face by the truth and the ground less than 1 mm. Kept (the evidence of that slide left
-    as it was), the goal, which the oracle reaches, was reported unreachable; dropped, it is reached
-    within its tolerance by the truth."""
+    along the face by the truth and the ground less than 1 mm (at 10°: 4.8 mm and 0.0 mm). Kept (the
+    evidence of that slide left as it was), the goal, which the oracle reaches, was reported
+    unreachable; dropped, it is reached within its tolerance by the truth (at −12.8°, 0.2 mm off)."""
     if not dropped:
         keep = lambda self, commanded, kinematics, slid: slid  # noqa: E731
         monkeypatch.setattr(Estimator, "_drop_unfounded_slide", keep)
     goals = (reach(theta_deg=31.588733853924694), reach(s_g_mm=-10.0))
-    done = run(*HAND_GAVE_TRIANGLE, goals, 2463577266)
+    done = run(*HAND_GAVE_TRIANGLE, goals, 10)
     data, goal = done.result.samples, done.summary["goals"][1]
     truth = np.asarray(data["true_coordinates"])
 
