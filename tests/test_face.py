@@ -39,7 +39,23 @@ def test_the_start_follows_the_estimate_until_the_hand_slides_then_stays():
     _hold(face, -0.010)
     assert _hold(face, -0.012) == pytest.approx((-L_H + 0.012 + MARGIN, L_H + 0.012 - MARGIN))
     _hold(face, -0.012, slides=True)
-    assert _hold(face, 0.005) == pytest.approx((-L_H + 0.012 + MARGIN, L_H + 0.012 - MARGIN))
+    assert _hold(face, 0.005, slides=True) == pytest.approx((-L_H + 0.012 + MARGIN, L_H + 0.012 - MARGIN))
+
+
+def test_while_the_hand_is_not_commanded_to_slide_the_face_stays_where_it_is_on_the_hand():
+    """A change of ``ŝ_h`` the hand was not commanded to make is the estimate improving: the face,
+    centres of pressure included, stays on the hand. (A paper hexagon's kinematics found again after
+    it rocked over its bottom face took ``ŝ_h`` 41 mm off and corrected it by 30 mm over the next
+    16 s; the face, kept in ``u``, cut the hand 12 mm from its centre, 34 mm inside the true face's
+    end, and a ground slide ended `rolled` with the hand flush and its centre of pressure 13 mm from
+    the hand's centre.)"""
+    face = _estimator()
+    _hold(face, 0.0)
+    _hold(face, 0.0, slides=True)  # the start's evidence is no longer the hand's extent
+    face.update(True, 0.0, 0.08, True, 10.0, 0.2, False)  # c = −20 mm
+    known = np.array(_hold(face, 0.0))
+    assert np.array(_hold(face, 0.02)) + 0.02 == pytest.approx(known)  # on the hand: as it was
+    assert np.array(_hold(face, 0.03, slides=True)) == pytest.approx(known - 0.02)  # slid: fixed in u
 
 
 def test_without_the_start_a_centre_of_pressure_is_all_that_is_known():
