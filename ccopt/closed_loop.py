@@ -917,7 +917,8 @@ class _Loop:
         coordinates = tracker.update(self.now, estimate, hand_pose)
         if tracker.done:
             return
-        if tracker.rolling and (tracker.step.motion in modes.SLIDES or not tracker.step.explore or tracker.use_estimate):
+        held = tracker.step.motion in modes.SLIDES or not tracker.step.explore or tracker.use_estimate
+        if tracker.rolling and held:
             self.velocity = np.zeros(3)  # pushed on, the hand would roll on (ROLL_TIME)
             return
         if coordinates is None:  # the estimate is unusable: hold where the command says

@@ -110,7 +110,8 @@ def test_a_goal_slide_that_ends_rolled_truly_had_the_hand_at_or_over_its_edge(ot
 
 def test_the_known_face_lies_on_the_hand_where_the_true_face_does(others):
     """The estimate's known face (``est_face`` + ``ŝ_h``, hand positions) inside the true face on the
-    hand, to 0.5 mm, wherever it is known. On branch `pace` the hexagon's kinematics, found again
+    hand, to 0.5 mm, wherever it is known. The paper hexagon's kinematics (pivots paced about the
+    naive lever), found again
     after it rocked over its bottom face (ground vertex switched twice), took ``ŝ_h`` 41 mm off and
     corrected it by 30 mm over the next 16 s with the hand sticking; the face, kept in ``u``, ended
     up 23 mm past the true face's end on one side and 34 mm short of it on the other, where it cut

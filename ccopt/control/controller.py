@@ -101,9 +101,10 @@ class ControllerParams:
             impedance ``k`` by that much; the force terms correct a ``force_rate`` share of the error
             per second, so turning at ``ω`` lags ``k d_guess ω / force_rate`` behind. A pivot about
             the naive lever is paced to ``ω = naive_force_lag · force_rate / (k · d_guess)`` (4.8°/s
-            on the default hand). Turned at the full speed, the goals study's first 7.2° exploration
-            pivots built 5–8 N of tangential force and slid the hand in 18 of 80 trials (12 more
-            rolled it); paced, none slid and one rolled.
+            on the default hand). Turned at the full speed, the first exploration pivots of the goals
+            study (seeds 0–1, 80 trials) built 5–8 N of tangential force: before the kinematics were
+            valid the hand slid 18 times and rolled 12; paced, it slid 3 times and rolled 8, none of
+            them in the first exploration (all in re-explorations at steep tilts, two trials).
         max_speed: largest impedance-target speed ``|Δn|, |Δt|`` (m/s) and ``|Δθ|`` (rad/s).
         slide_speed: largest impedance-target speed ``|Δn|, |Δt|`` (m/s) while a slide is commanded
             (hand or ground), below ``max_speed`` where smaller. A slide is a quasi-static motion: driven
@@ -298,6 +299,12 @@ def _scaled(solution: QPSolution, instance: QPInstance, factor: float) -> QPSolu
     return QPSolution(step, change, slack, slack <= INFEASIBLE_SLACK, solution.backend)
 
 
+def _naive(state: ControlInput) -> bool:
+    """Whether ``v_θ`` is the paper's naive one (``s_h = 0``, ``d = d_guess``): the lever is not even
+    roughly known."""
+    return not (math.isfinite(state.s_h) and math.isfinite(state.d))
+
+
 class _Terms:
     """The tracking terms ``α (dᵀΔx − δ)²`` of one QP, collected in order."""
 
@@ -435,7 +442,7 @@ class Controller:
         False and a solution flagged infeasible with infinite slack: never a NaN for the plant. A step
         beyond the speed limit is scaled down to it, and the solution reported is the scaled step's.
         A pivot about the naive ``v_θ`` is paced (:meth:`_paced`)."""
-        if command.motion is Motion.PIVOT and not (math.isfinite(state.s_h) and math.isfinite(state.d)):
+        if command.motion is Motion.PIVOT and _naive(state):
             command = self._paced(state, command)
         if self._tick is not None:
             return self._compiled_update(state, command)
@@ -511,9 +518,7 @@ class Controller:
         """The compiled tick's scalars (:data:`ccopt.control.tick.SCALARS`), resolved as
         :meth:`build_instance` resolves them: the naive ``v_θ``, the default force targets."""
         p = self.params
-        s_h, d = state.s_h, state.d
-        if not (math.isfinite(s_h) and math.isfinite(d)):  # not even roughly known: the naive v_θ
-            s_h, d = 0.0, p.d_guess
+        s_h, d = (0.0, p.d_guess) if _naive(state) else (state.s_h, state.d)
         force_target = p.normal_force if state.force_target is None else state.force_target
         f_t_target = state.tangential_target
         if f_t_target is None:
@@ -527,9 +532,7 @@ class Controller:
         """The QP of this tick (exposed for studies and tests)."""
         p = self.params
         stiffness = self.hand.stiffness_in_hand_frame(state.hand_angle)
-        s_h, d = state.s_h, state.d
-        if not (math.isfinite(s_h) and math.isfinite(d)):  # not even roughly known: the naive v_θ
-            s_h, d = 0.0, p.d_guess
+        s_h, d = (0.0, p.d_guess) if _naive(state) else (state.s_h, state.d)
         vectors = contact.admissible_motions(state.hand_angle, s_h, d)
         free, balance = self._model(state, command, vectors)
         free_directions = vectors[:, :1] if len(free) == 1 else vectors[:, free]  # θ_o is column 0
