@@ -76,11 +76,21 @@ def test_a_sample_not_flush_or_below_the_force_threshold_shows_nothing():
     assert face.update(True, 0.0, 0.08, True, 2.0, -0.04, False) == NO_FACE
 
 
-def test_found_again_on_the_same_vertex_the_face_is_kept():
+def test_found_again_on_the_same_vertex_after_a_slide_the_face_is_kept_in_u():
     face = _estimator()
     known = _hold(face, -0.01)
-    assert _hold(face, math.nan, valid=False) == UNKNOWN_FACE
+    assert _hold(face, math.nan, valid=False, slides=True) == UNKNOWN_FACE
     assert _hold(face, -0.02, d=0.081) == pytest.approx(known)  # the hand slid while lost: same u
+
+
+def test_found_again_without_a_slide_the_face_stays_on_the_hand_whatever_d():
+    """Same ``d̂``, ``ŝ_h`` 51 mm off: a paper hexagon rocking over its bottom face (parallel to the
+    hand's face, so both its vertices have the same ``d``) found again mid-rock. Kept in ``u``, the
+    known face reached 53 mm past the hand's end."""
+    face = _estimator()
+    known = np.array(_hold(face, -0.03))
+    _hold(face, math.nan, valid=False)
+    assert np.array(_hold(face, 0.021, d=0.08)) + 0.021 == pytest.approx(known - 0.03)
 
 
 def test_on_another_vertex_the_face_moves_with_the_hand_unless_the_hand_slid():

@@ -382,8 +382,8 @@ class Estimator:
         hand_slid = self.hand_slides.slid
         known = kinematics.theta_o_valid and kinematics.s_h_valid and kinematics.contact_valid
         flush = in_contact and likely.hand_geometry == _FLUSH
-        sliding = commanded is not None and commanded.hand_mode != _STICK
-        face = self.face.update(known, kinematics.s_h, kinematics.d, flush, f_n, torque, sliding)
+        slides = commanded is not None and (commanded.hand_mode != _STICK or commanded.ground_mode != _STICK)
+        face = self.face.update(known, kinematics.s_h, kinematics.d, flush, f_n, torque, slides)
         self._patch = known_patch(face, kinematics.s_h)
         self._last = _assemble(
             time,

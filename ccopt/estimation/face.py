@@ -18,28 +18,34 @@ Two kinds of evidence tell where the face is, conservatively (the interval lies 
   ``min_normal_force`` and the kinematics valid has its centre of pressure ``c = −τ/f_n`` on the
   face, at ``u = c − ŝ_h``.
 
-While the hand is not commanded to slide it does not move on the face, so a change of ``ŝ_h`` then
-is the estimate improving (or, found again, the object on another vertex): the evidence stays where
-it is on the hand (``u`` moves by the change of ``ŝ_h``). Only while a hand slide is commanded is the
-evidence held fixed in ``u``. Kept in ``u`` throughout, the centres of pressure a paper hexagon's
-kinematics saw just after they were found again, with ``ŝ_h`` 41 mm off (the object had rocked over
+While no slide is commanded the hand does not move on the face, so a change of ``ŝ_h`` then is the
+estimate improving (or, found again, the object on another vertex): the evidence stays where it is
+on the hand (``u`` moves by the change of ``ŝ_h``). While a slide is commanded the evidence is held
+fixed in ``u``: a hand slide moves the hand on the face, and a ground slide may too (a heavy
+quadrilateral's ground slide near the vertical slid the hand 10 mm along the face instead). Kept in
+``u`` throughout, the centres of pressure a paper hexagon's kinematics saw just after they were
+found again, with ``ŝ_h`` 41 mm off (the object had rocked over
 its bottom face, onto its other vertex and back), stayed 30 mm off the hand once ``ŝ_h`` converged:
 the known face cut the hand 11 mm from its centre, 34 mm inside the true face's end, and a ground
 slide with the hand flush ended `rolled`.
 
 The interval reported is their hull shrunk by ``margin`` at each end (the error of ``ŝ_h``) and each
 centre of pressure also by ``torque_noise / f_n`` (the torque's noise). While the kinematics are lost
-the face is not reported. When they are found again with the same ``d̂`` (within ``same_vertex``),
-the object is on the same vertex (another vertex at the same distance from the face would need the
-object to have tipped over the edge between them, through lying flat) and the face is known as it
-was. With another ``d̂`` the object rolled onto another vertex, under the same face: if the hand was
-not commanded to slide meanwhile, the face is where it was on the hand (``u`` moves by the change of
-``ŝ_h``); else it is forgotten, and from then on only centres of pressure tell it.
+the face is not reported. When they are found again and no slide was commanded
+meanwhile, the face is where it was on the hand (``u`` moves by the change of ``ŝ_h``), whatever
+the vertex: the object may have rolled onto another vertex under the same face, or the estimate,
+found again, may differ. A paper hexagon rocking over its bottom face (parallel to the hand's face,
+so both its vertices have the same ``d``) was found again at 2° with ``ŝ_h`` 51 mm off; kept in
+``u`` because ``d̂`` had not changed, the known face reached 53 mm past the hand's end. If a slide was
+commanded while they were lost, the face is kept in ``u`` when ``d̂`` is the same
+(within ``same_vertex``: the same vertex, the hand may have slid on the face), and forgotten
+otherwise (from then on only centres of pressure tell it); on an object with a ground face parallel
+to the hand's face, a rock over it during such a slide is taken for the same vertex.
 
 Only commanded slides count: the classifier reports the hand sliding whenever its friction is not
-yet estimated, which is most of the start. A replay without commands takes the hand as never
-commanded to slide, so its evidence stays on the hand through any slide: there the face is
-only as good as the recording's hand slides are few.
+yet estimated, which is most of the start. A replay without commands takes no slide as commanded,
+so its evidence stays on the hand through any slide: there the face is only as good as the
+recording's hand slides are few.
 """
 
 from __future__ import annotations
@@ -79,8 +85,8 @@ class FaceParams:
         min_normal_force: centres of pressure count at this normal force or above (N).
         torque_noise: a centre of pressure is taken ``torque_noise / f_n`` inside where it was
             measured (N·m; about twice the default sensors' torque noise).
-        same_vertex: kinematics found again with ``d̂`` within this (m) of the last are on the same
-            ground contact.
+        same_vertex: kinematics found again, after a slide was commanded, with ``d̂``
+            within this (m) of the last are on the same ground contact.
     """
 
     start_on_face: bool = True
@@ -118,7 +124,7 @@ class FaceEstimator:
         self._at_start = self.params.start_on_face  # the hand lies where the run started it
         self._valid = False
         self._d = self._s_h = math.nan  # d̂ and ŝ_h when the kinematics were last valid
-        self._hand_slid = False  # the hand was commanded to slide since they were
+        self._slid = False  # a slide was commanded since they were
 
     def update(
         self,
@@ -128,14 +134,14 @@ class FaceEstimator:
         flush: bool,
         f_n: float,
         torque: float,
-        hand_slides: bool,
+        slides: bool,
     ) -> tuple[float, float]:
         """One sample: whether the kinematics are ``valid``, ``ŝ_h`` and ``d̂`` (m), whether the hand
-        is ``flush``, the wrench's ``f_n`` (N) and ``τ`` (N·m), whether the hand is commanded to
-        slide. Returns :attr:`face`."""
-        if hand_slides:  # the face under the hand moves: the start's evidence is as last estimated
+        is ``flush``, the wrench's ``f_n`` (N) and ``τ`` (N·m), whether a slide (of either contact)
+        is commanded. Returns :attr:`face`."""
+        if slides:  # the hand may move on the face: the start's evidence is as last estimated
             self._at_start = False
-            self._hand_slid = not valid
+            self._slid = not valid
         if not valid:
             if self._valid:  # lost: the hand may have slid unseen, the start's evidence stays
                 self._valid, self._at_start, self.face = False, False, UNKNOWN_FACE
@@ -143,7 +149,7 @@ class FaceEstimator:
         changed = False
         if not self._valid:
             self._found(s_h, d)
-        elif not hand_slides and s_h != self._s_h:  # the face stays where it is on the hand
+        elif not slides and s_h != self._s_h:  # the face stays where it is on the hand
             self._shift(self._s_h - s_h)
             changed = True
         self._d, self._s_h = d, s_h
@@ -161,14 +167,12 @@ class FaceEstimator:
     def _found(self, s_h: float, d: float) -> None:
         """The kinematics became valid (module docstring)."""
         self._valid = True
-        if not abs(d - self._d) <= self.params.same_vertex:  # another vertex (or the first)
-            shift = self._s_h - s_h
-            keep = not self._hand_slid and math.isfinite(shift)
-            if keep:
-                self._shift(shift)
-            else:
-                (self._low, self._high), self._start = NO_FACE, NO_FACE
-        self._hand_slid = False
+        shift = self._s_h - s_h
+        if not self._slid and math.isfinite(shift):  # the face stays where it was on the hand
+            self._shift(shift)
+        elif not abs(d - self._d) <= self.params.same_vertex:  # slid onto another vertex (or the first)
+            (self._low, self._high), self._start = NO_FACE, NO_FACE
+        self._slid = False
         self._report()
 
     def _shift(self, shift: float) -> None:
