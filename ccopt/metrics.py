@@ -87,13 +87,27 @@ def realised_ratios(data: Mapping[str, np.ndarray], steps: Sequence[Mapping[str,
     return np.asarray(ratios, dtype=float)
 
 
+def turn_from_flush(relative: np.ndarray) -> float:
+    """The largest turn (rad) of the hand against the object over one step's samples of
+    ``θ_o − θ_h`` (rad, 0 flush): the distance of each sample from the span between flush and the
+    step's first sample. A hand coming back to flush from a roll the step began with (the step
+    after a landing on a face) does what a step that keeps it flush asks, and does not count: the
+    paper rectangle's pivot back from its landing went from +1.52° to the elastic −0.48°, a 2.0°
+    excursion from its start but 0.48° from flush."""
+    if relative.size == 0:
+        return 0.0
+    low, high = min(0.0, relative[0]), max(0.0, relative[0])
+    return float(max(low - relative.min(), relative.max() - high, 0.0))
+
+
 def unintended_slips(
     data: Mapping[str, np.ndarray], steps: Sequence[Mapping[str, object]]
 ) -> list[dict[str, object]]:
     """Steps in which a contact that had to stick truly slid, or a hand that had to stay flush pivoted.
 
     Slip is the integral of the true tangential slip speed at the contact over the step (m), which
-    elastic rolling of the hand does not produce; pivoting is the excursion of ``θ_o − θ_h`` (rad).
+    elastic rolling of the hand does not produce; pivoting is the hand's turn against the object
+    away from flush and from where the step began (:func:`turn_from_flush`, rad).
     """
     events = []
     time = np.asarray(data["time"])
@@ -108,7 +122,7 @@ def unintended_slips(
         segment = relative_angle[start : end + 1]
         measures = (
             ("hand_slide", hand_stick, slid[end, 0] - slid[start, 0], SLIP_DISTANCE),
-            ("hand_pivot", hand_flush, float(np.max(np.abs(segment - segment[0]))), SLIP_ANGLE),
+            ("hand_pivot", hand_flush, turn_from_flush(segment), SLIP_ANGLE),
             ("ground_slide", ground_stick, slid[end, 1] - slid[start, 1], SLIP_DISTANCE),
         )
         for name, required, excursion, limit in measures:

@@ -25,7 +25,7 @@ import pytest
 
 from ccopt.closed_loop import LoopParams, start_config
 from ccopt.experiment import Experiment, run_experiment
-from ccopt.metrics import SLIP_ANGLE
+from ccopt.metrics import SLIP_ANGLE, turn_from_flush
 from ccopt.objects import from_vertices, make_object
 from ccopt.planning.sequencer import TIPPING_CLEARANCE
 from ccopt.planning.tour import vertex_range
@@ -70,7 +70,8 @@ def flat(request):
 
 def assert_landed_without_turning_the_hand(experiment: Experiment) -> None:
     """A goal pivot ended ``rolled`` (the landing); by the truth no goal motion turned the hand
-    against the object by :data:`ccopt.metrics.SLIP_ANGLE`, and the run has no unintended slip."""
+    against the object, away from flush and from where it began (:func:`ccopt.metrics.turn_from_flush`),
+    by :data:`ccopt.metrics.SLIP_ANGLE`, and the run has no unintended slip."""
     data = experiment.result.samples
     time = np.asarray(data["time"])
     relative = np.asarray(data["true_coordinates"])[:, 0] - np.asarray(data["true_hand_pose"])[:, 2]
@@ -79,8 +80,8 @@ def assert_landed_without_turning_the_hand(experiment: Experiment) -> None:
     for step in goal_steps:
         begin = int(np.searchsorted(time, step.start_time))
         end = min(int(np.searchsorted(time, step.end_time)), len(time) - 1)
-        turned = np.abs(relative[begin : end + 1] - relative[begin])
-        assert turned.max() < SLIP_ANGLE, (step, math.degrees(turned.max()))
+        turned = turn_from_flush(relative[begin : end + 1])
+        assert turned < SLIP_ANGLE, (step, math.degrees(turned))
     assert experiment.summary["unintended_slips"] == 0
 
 
