@@ -1,32 +1,34 @@
 """Goals that a misread motion used to cost for good, judged in closed loop by the simulator's truth
 and the experimenter's oracle (the planner on the true object). Goals-study objects:
 
-* **A roll before the pivot turned anything.** The exploration pivots the object to 9.9° and back;
+* **A roll before the pivot turned anything.** The exploration pivots the object to 9.8° and back;
   its hand-slide probe rolls the hand 0.8° on the face's end, and the first goal's pivot down from
-  16.9° begins with its torque row tight and ends ``rolled`` with the object still. Taken as a
+  17.1° begins with its torque row tight and ends ``rolled`` with the object still. Taken as a
   tipping point there, it cut the reach to [17°, 75°] for the rest of the run, and the later goals
   below 17° were reported unreachable, though the oracle reaches them
-  (:meth:`ccopt.planning.sequencer.GoalSequencer._rolled`; seed 1).
+  (:meth:`ccopt.planning.sequencer.GoalSequencer._rolled`; seed 1, trial 38, run with noise seed 1:
+  the trial's own noise seed no longer makes the case).
 * **Ground slides lost near the vertical.** Once the hand has slid, within 9.6° of the vertical
   the estimator cannot tell a ground slide from the hand's where the hand is at its limit too, and
   lets go of both positions. The goal ``s_g`` −10 mm lost its slides at 9.6°, 2.1° and −5.1°, an
   exploration after each, and failed; the oracle reaches it
   (:meth:`~ccopt.planning.sequencer.GoalSequencer._failed_slide`; seed 1).
 * **An object turned onto another vertex, unseen, that left the kinematics on a wrong ground
-  contact.** In the exploration's third pivot, at 16°, a pentagon turned onto its neighbouring
-  vertex (``d`` 121 → 134 mm, the ground contact 43 mm along the ground); the kinematics stayed on
-  the first contact, and drifting between the two (``ŝ_g`` 20 mm at the goal's start) they gave
-  the ``s_g`` goal its origin: claimed reached 17 mm off. The moment balance about that contact
-  disagreed with ``M̂`` 0.13 s after the turn (:meth:`ccopt.estimation.estimator.Estimator._check_moment`;
-  seed 2). Before the exploration's pivots about the naive lever were paced, a flat triangle (seed 4)
+  contact.** In the exploration's pivot down from 16.8°, at 14.8°, a pentagon turned onto its
+  neighbouring vertex (``d`` 121 → 134 mm, the ground contact 43 mm along the ground); the
+  kinematics stayed on the first contact, and drifting between the two (``ŝ_g`` 21 mm at the goal's
+  start) they gave the ``s_g`` goal its origin: claimed reached 16 mm off. The moment balance about
+  that contact disagreed with ``M̂`` 0.11 s after the turn
+  (:meth:`ccopt.estimation.estimator.Estimator._check_moment`; seed 2, trial 1, run with noise
+  seed 0). Before the exploration's pivots about the naive lever were paced, a flat triangle (seed 4)
   slid 6 mm under the hand in the exploration's second pivot, to the same effect; it no longer
   slides so (30 noise seeds: its four goals reached within tolerance with the check or without).
-* **A ground slide that slid the hand, read as the ground's.** At 2.7° a heavy quadrilateral's
-  ground slide towards −s_g moved the hand 10 mm along the face instead, and the kinematics,
+* **A ground slide that slid the hand, read as the ground's.** At 2.4° a heavy quadrilateral's
+  ground slide towards −s_g moved the hand 11.6 mm along the face instead, and the kinematics,
   which cannot tell the two apart by the pose so near the vertical, moved the ground contact: the
   goal ``s_g`` −10 mm was claimed with the object where it began. The moment balance gives the
   hand's position on the face (:meth:`ccopt.estimation.estimator.Estimator._check_hand_give`;
-  seed 7).
+  seed 7, trial 35, run with noise seed 0).
 * **A hand's slide taken for the ground's friction.** A ground slide at 10° slid the hand 4.8 mm
   along the face in 2.7 s, the ground not at all; before the kinematics were let go, ``ŝ_g`` had
   moved, and the ground counted as seen sliding towards −s_g: the hand's friction limit became the
@@ -70,7 +72,7 @@ def rolled_early() -> Experiment:
     vertices = [[-0.01616214370390999, 0.07494277258999732], [-0.06745684652252526, -0.021110137622774774],
                 [0.04480139537426041, -0.06575319221187154]]
     goals = (reach(s_h_mm=-10.0), reach(theta_deg=LOW_GOAL_DEG), reach(theta_deg=LOW_GOAL_DEG))
-    return run(vertices, 0.5808597565229205, 0.619501255473099, 0.7561156066309858, goals, 487420610)
+    return run(vertices, 0.5808597565229205, 0.619501255473099, 0.7561156066309858, goals, 1)
 
 
 @pytest.fixture(scope="module")
@@ -165,13 +167,13 @@ PENTAGON_GOALS = (reach(s_g_mm=-10.0),)
 
 @pytest.mark.parametrize("checked", [True, False], ids=["moment checked", "unchecked"])
 def test_kinematics_the_moment_balance_contradicts_are_learned_anew(checked: bool) -> None:
-    """The case (goals seed 2, trial 1): unchecked (the check's sample count out of reach), the
-    wrong kinematics claimed the ``s_g`` goal outside its tolerance by the truth (17.2 mm off).
-    Checked, they are reset and learned again by exploring, and every goal is reached within its
-    tolerance by the truth (0.4 mm off)."""
+    """The case (goals seed 2, trial 1, noise seed 0): unchecked (the check's sample count out of
+    reach), the wrong kinematics claimed the ``s_g`` goal outside its tolerance by the truth (16.3 mm
+    off). Checked, they are reset and learned again by exploring, and every goal is reached within
+    its tolerance by the truth (0.9 mm off)."""
     estimator = EstimatorParams() if checked else EstimatorParams(moment_mismatch_samples=10**9)
     params = LoopParams(estimator_params=estimator)
-    summary = run(*TURNED_PENTAGON, PENTAGON_GOALS, 2240297063, params).summary
+    summary = run(*TURNED_PENTAGON, PENTAGON_GOALS, 0, params).summary
     goals = summary["goals"]
     if checked:
         assert all(g["status"] == "reached" and g["within_tolerance"] for g in goals), goals
@@ -191,12 +193,13 @@ QUADRILATERAL_GOALS = (
 
 @pytest.mark.parametrize("checked", [True, False], ids=["hand give checked", "unchecked"])
 def test_a_ground_slide_that_slid_the_hand_is_not_taken_for_the_grounds(checked: bool) -> None:
-    """The case: unchecked (the departure out of reach), an ``s_g`` goal was claimed reached
-    outside its tolerance by the truth. Checked, every goal claimed reached is within its tolerance
-    by the truth, and the two ``s_g`` goals are reached."""
+    """The case (goals seed 7, trial 35, noise seed 0): unchecked (the departure out of reach), an
+    ``s_g`` goal was claimed reached outside its tolerance by the truth (9.9 mm off, the object where
+    it began). Checked, every goal claimed reached is within its tolerance by the truth, and the two
+    ``s_g`` goals are reached (1.0 mm off)."""
     estimator = EstimatorParams() if checked else EstimatorParams(hand_give=1.0)
     params = LoopParams(estimator_params=estimator)
-    goals = run(*HEAVY_QUADRILATERAL, QUADRILATERAL_GOALS, 796052249, params).summary["goals"]
+    goals = run(*HEAVY_QUADRILATERAL, QUADRILATERAL_GOALS, 0, params).summary["goals"]
     claimed = [g for g in goals if g["status"] == "reached"]
     if checked:
         assert all(g["within_tolerance"] for g in claimed), goals
