@@ -177,7 +177,8 @@ class KinematicsParams:
             ``hand_slide_travel`` (m) of the hand along the face moves it (``Δ sin θ``) means the
             hand slid instead (:meth:`KinematicEstimator._follow_ground`). A ground contact sliding
             on a flat ground keeps its height (it sinks with the normal force, which ``k``
-            models). On the goals study's 40 random objects ``ŷ_o`` moved at most 0.67 mm in the
+            models). On the goals study's 40 random objects (measured before the pivots about the
+            naive lever were paced) ``ŷ_o`` moved at most 0.67 mm in the
             commanded ground slides where the ground slid or nothing did, and 1.2–4.3 mm where the
             hand slid 6–16 mm instead at 9–29° (each read as the ground's slide; two claimed goals
             10 mm off). The travel keeps a hand that gives a millimetre or two before the ground
