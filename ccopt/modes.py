@@ -53,6 +53,11 @@ class ContactConfiguration:
     hand_geometry: HandGeometry = HandGeometry.FLUSH
     ground_mode: ContactMode = ContactMode.STICK
 
+    @property
+    def slides(self) -> bool:
+        """Whether a contact slides: the hand's or the ground's."""
+        return self.hand_mode != ContactMode.STICK or self.ground_mode != ContactMode.STICK
+
 
 class Motion(Enum):
     """A commanded admissible motion (paper Fig. 2): what changes, and in which direction."""

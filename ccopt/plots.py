@@ -462,8 +462,8 @@ UNCHANGED = 255
 NICE_SPEEDS = (1, 2, 3, 5, 10, 20, 30, 50, 100)
 """Playback speeds (× simulated time) the GIF chooses from."""
 MAX_FRAMES = 60
-"""The GIF's frames at most: a ``paper`` run (28.5 s) plays at 5× in 58 frames, half a second of the
-run a frame (at 120, 3× in 96 frames; each frame takes about 2 ms to draw and write)."""
+"""The GIF's frames at most: the demo's ``paper`` run (42.5 s) plays at 10× in 43 frames, a second of
+the run a frame (at 120, 5× in 86; each frame takes about 2 ms to draw and write)."""
 
 
 def playback(duration: float, max_frames: int) -> tuple[float, int]:

@@ -61,3 +61,10 @@ def test_a_slide_keeps_the_position_of_the_contact_its_configuration_holds_stick
             expected = modes.S_G
         assert modes.kept_coordinate(motion) == expected, motion
         assert modes.kept_coordinate(modes.kind_of(motion)) == expected, motion
+
+
+@pytest.mark.parametrize("motion", list(Motion))
+def test_a_configuration_slides_exactly_when_its_motion_removes_a_friction_row(motion):
+    """The configuration a motion commands slides a contact iff the motion is one of :data:`SLIDES`
+    (it removes a friction row)."""
+    assert modes.configuration(motion).slides is (motion in modes.SLIDES)

@@ -110,9 +110,11 @@ def test_a_goal_slide_that_ends_rolled_truly_had_the_hand_at_or_over_its_edge(ot
 
 def test_the_known_face_lies_on_the_hand_where_the_true_face_does(others):
     """The estimate's known face (``est_face`` + ``ŝ_h``, hand positions) inside the true face on the
-    hand, to 0.5 mm, wherever it is known. The paper hexagon's kinematics (pivots paced about the
-    naive lever), found again
-    after it rocked over its bottom face (ground vertex switched twice), took ``ŝ_h`` 41 mm off and
+    hand, to 0.5 mm, wherever it is known. The paper hexagon rocks over its bottom face (its ground
+    vertex switches back and forth near 0°). Found again at 2° with ``ŝ_h`` 51 mm off and the same
+    ``d̂`` (the bottom face is parallel to the hand's), its face was kept in ``u`` and reached 53 mm
+    past the hand's end. Before exploration pivots held their target while the hand rolled, its
+    kinematics, found again after such a rock, took ``ŝ_h`` 41 mm off and
     corrected it by 30 mm over the next 16 s with the hand sticking; the face, kept in ``u``, ended
     up 23 mm past the true face's end on one side and 34 mm short of it on the other, where it cut
     the hand 11 mm from its centre: a ground slide ended `rolled` with the hand truly flush and its

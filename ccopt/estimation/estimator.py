@@ -382,7 +382,7 @@ class Estimator:
         hand_slid = self.hand_slides.slid
         known = kinematics.theta_o_valid and kinematics.s_h_valid and kinematics.contact_valid
         flush = in_contact and likely.hand_geometry == _FLUSH
-        slides = commanded is not None and (commanded.hand_mode != _STICK or commanded.ground_mode != _STICK)
+        slides = commanded is not None and commanded.slides
         face = self.face.update(known, kinematics.s_h, kinematics.d, flush, f_n, torque, slides)
         self._patch = known_patch(face, kinematics.s_h)
         self._last = _assemble(
@@ -788,7 +788,7 @@ def _unacted_reports(
     command keeps the hand sticking (its eq. 16 gate is then tighter, to catch a creeping slide)."""
     if commanded is None:
         return likely.ground_mode != ContactMode.STICK, False
-    slide = commanded.ground_mode != ContactMode.STICK or commanded.hand_mode != ContactMode.STICK
+    slide = commanded.slides
     hand = commanded.hand_mode == ContactMode.STICK and likely.hand_mode != ContactMode.STICK
     ground = slide and likely.ground_mode != ContactMode.STICK
     return ground, hand

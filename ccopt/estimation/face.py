@@ -23,16 +23,16 @@ estimate improving (or, found again, the object on another vertex): the evidence
 on the hand (``u`` moves by the change of ``ŝ_h``). While a slide is commanded the evidence is held
 fixed in ``u``: a hand slide moves the hand on the face, and a ground slide may too (a heavy
 quadrilateral's ground slide near the vertical slid the hand 10 mm along the face instead). Kept in
-``u`` throughout, the centres of pressure a paper hexagon's kinematics saw just after they were
-found again, with ``ŝ_h`` 41 mm off (the object had rocked over
-its bottom face, onto its other vertex and back), stayed 30 mm off the hand once ``ŝ_h`` converged:
-the known face cut the hand 11 mm from its centre, 34 mm inside the true face's end, and a ground
-slide with the hand flush ended `rolled`.
+``u`` throughout (measured before exploration pivots held their target while the hand rolled), the
+centres of pressure a paper hexagon's kinematics saw just after they were found again, with
+``ŝ_h`` 41 mm off (the object had rocked over its bottom face, onto its other vertex and back),
+stayed 30 mm off the hand once ``ŝ_h`` converged: the known face cut the hand 11 mm from its
+centre, 34 mm inside the true face's end, and a ground slide with the hand flush ended `rolled`.
 
 The interval reported is their hull shrunk by ``margin`` at each end (the error of ``ŝ_h``) and each
 centre of pressure also by ``torque_noise / f_n`` (the torque's noise). While the kinematics are lost
-the face is not reported. When they are found again and no slide was commanded
-meanwhile, the face is where it was on the hand (``u`` moves by the change of ``ŝ_h``), whatever
+the face is not reported. When they are found again and no slide was commanded meanwhile, the
+face is where it was on the hand (``u`` moves by the change of ``ŝ_h``), whatever
 the vertex: the object may have rolled onto another vertex under the same face, or the estimate,
 found again, may differ. A paper hexagon rocking over its bottom face (parallel to the hand's face,
 so both its vertices have the same ``d``) was found again at 2° with ``ŝ_h`` 51 mm off; kept in
