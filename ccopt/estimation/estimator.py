@@ -66,6 +66,7 @@ from ccopt.estimation.gravity import (
 from ccopt.estimation.ground_cone import GroundCone, GroundConeEstimator, GroundConeParams
 from ccopt.estimation.kinematics import KinematicEstimate, KinematicEstimator, KinematicsParams
 from ccopt.estimation.quantile import check_number
+from ccopt.estimation.records import record
 from ccopt.estimation.sliding_face import (
     UNDETERMINED,
     FitSnapshot,
@@ -303,7 +304,6 @@ class Estimator:
         self.sliding_face = SlidingFaceFit(self.params.sliding_face)
         self.hand_slides = SlideEvidence(self.params.slid_distance)
         self._cone_input = np.zeros(12)
-        self._cone_output = np.zeros(_CONE_ROWS.function.numel_out(0))
         self._contact_force = self.params.contact_force
         self._theta_noise = self.params.theta_filter.noise
         self._split_tilt = self.params.kinematics.split_tilt
@@ -573,7 +573,10 @@ class Estimator:
             flat[7:9] = ground.b
             self._cone_ground = ground
         flat[9:12] = wrench
-        out = np.frombuffer(_CONE_ROWS.call_flat(flat, self._cone_output).tobytes())  # a read-only copy
+        binding = _CONE_ROWS.buffers()
+        binding.flat_inputs[0][:] = flat
+        binding.evaluate()
+        out = np.frombuffer(binding.flat_outputs[0].tobytes())  # a read-only copy
         rows = 3 * N_CONE_ROWS
         margins = out[rows + N_CONE_ROWS :]
         return (out[:rows].reshape(N_CONE_ROWS, 3), out[rows : rows + N_CONE_ROWS], margins), margins.tolist()
@@ -935,7 +938,7 @@ def _assemble(
     fitted = (ground.fitted[0] and slid[0], ground.fitted[1] and slid[1])
     hull_mu_g = ground.mu_g if fitted[0] and fitted[1] else math.nan
     cone_rows, cone_bounds, margins = cone
-    return validation.trusted(  # every field, each well formed by construction
+    return record(
         Estimate,
         {
             "time": time,

@@ -112,8 +112,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ccopt import geometry, validation
+from ccopt import geometry
 from ccopt.estimation.quantile import check_count, check_number
+from ccopt.estimation.records import record
 from ccopt.modes import ContactConfiguration, ContactMode, HandGeometry
 
 D, X_O, Y_O, S_H, C, K = range(6)
@@ -421,14 +422,16 @@ class KinematicEstimator:
             math.isnan(last) or abs(math.remainder(pose[2] - last, math.tau)) >= self._excitation_angle
         )
         row, value = self._tangent_row(pose, frame)
-        gate = self._hand_slip_gate_squared if hand_may_slide else self._gate_squared
-        prediction = None if not hand_sticks or self._s_h_released else self._predict(row, value)
-        if prediction is None or not self._within(prediction, gate):
-            self._release(S_H)  # reported sliding, unknown, or slid although reported sticking
-            self._scalar_update(row, value)
-            self._s_h_released = False
-        elif excited:
-            self._apply(prediction)
+        if hand_sticks and not self._s_h_released:
+            prediction = self._predict(row, value)
+            gate = self._hand_slip_gate_squared if hand_may_slide else self._gate_squared
+            if self._within(prediction, gate):
+                if excited:
+                    self._apply(prediction)
+                return
+        self._release(S_H)  # reported sliding, unknown, or slid although reported sticking
+        self._scalar_update(row, value)
+        self._s_h_released = False
 
     def _ground_slid(self, pose: list[float], frame: _Frame, hand_sticks: bool) -> bool:
         """Whether the ground slid since it was first reported sliding: latched, or now an innovation
@@ -669,7 +672,8 @@ class KinematicEstimator:
             s_h = nan
         contact_valid = max(std_d, std_x, std_y) <= valid_std
         s_h_valid = s_h_defined and contact_valid and std_s <= valid_std
-        return validation.trusted(  # every field, each well formed by construction
+        theta_o_valid = self._theta_o_valid
+        return record(
             KinematicEstimate,
             {
                 "theta_o": self._theta_o,
@@ -678,7 +682,7 @@ class KinematicEstimator:
                 "d": d if contact_valid else nan,
                 "r_o": np.array((x_o, y_o) if contact_valid else (nan, nan)),
                 "std": (std_d, std_x, std_y, std_s),
-                "theta_o_valid": self._theta_o_valid,
+                "theta_o_valid": theta_o_valid,
                 "s_h_valid": s_h_valid,
                 "contact_valid": contact_valid,
                 "rough": (
@@ -687,7 +691,7 @@ class KinematicEstimator:
                     y_o if std_y <= rough_std else nan,
                     s_h if std_s <= rough_std else nan,
                 ),
-                "theta_std": self._theta_std if self._theta_o_valid else nan,
+                "theta_std": self._theta_std if theta_o_valid else nan,
                 "compliance": compliance,
                 "compliance_std": sqrt(0.0 if var_c < 0.0 else var_c),
                 "normal_compliance": normal_compliance,
