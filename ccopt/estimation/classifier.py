@@ -82,7 +82,10 @@ class ModeClassifier:
     def __init__(self, params: ModeParams | None = None) -> None:
         self.params = params if params is not None else ModeParams()
         thresholds = (self.params.slide_margin, self.params.pivot_margin, self.params.ground_margin)
-        self._contacts = tuple(zip(range(3), thresholds, _ROW_PAIRS, strict=True))
+        self._contacts = tuple(
+            (contact, threshold, pos, neg)
+            for contact, threshold, (pos, neg) in zip(range(3), thresholds, _ROW_PAIRS, strict=True)
+        )
         self._hold_time = self.params.hold_time
         self._values = [0, 0, 0]  # the latched reports of the hand slide, hand pivot, ground slide
         self._until = [-math.inf] * 3  # the time each report is held until
@@ -97,11 +100,13 @@ class ModeClassifier:
             margins: ``b − N w`` of the estimated cone (6 values), order :class:`~ccopt.contact.Row`.
             estimated: per row, whether the row is estimated (6 values).
         """
-        values, until = self._values, self._until
-        for contact, threshold, (pos, neg) in self._contacts:
-            raw = tight_direction(margins[pos], margins[neg], threshold, estimated[pos] and estimated[neg])
-            if raw:
-                values[contact], until[contact] = raw, time + self._hold_time
-            elif time >= until[contact]:  # nothing tight: a report is held for hold_time
-                values[contact] = 0
+        values, until, hold_time = self._values, self._until, self._hold_time
+        for contact, threshold, pos, neg in self._contacts:  # tight_direction written out: a call costs more
+            margin_pos, margin_neg = margins[pos], margins[neg]
+            smaller = margin_neg if margin_neg < margin_pos else margin_pos  # min(margin_pos, margin_neg)
+            if estimated[pos] and estimated[neg] and smaller > threshold:
+                if time >= until[contact]:  # nothing tight: a report is held for hold_time
+                    values[contact] = 0
+            else:
+                values[contact], until[contact] = 1 if margin_pos <= margin_neg else -1, time + hold_time
         return _CONFIGURATIONS[values[0], values[1], values[2]]

@@ -155,9 +155,10 @@ class FaceEstimator:
         self._d, self._s_h = d, s_h
         if self._at_start:
             self._start, changed = hand_extent(self.half_length, s_h), True
-        if flush and f_n >= self.params.min_normal_force:
-            u = geometry.face_position(geometry.centre_of_pressure(f_n, torque), s_h)
-            noise = self.params.torque_noise / f_n
+        params = self.params
+        if flush and f_n >= params.min_normal_force:
+            u = -torque / f_n - s_h  # geometry.face_position(geometry.centre_of_pressure(f_n, τ), ŝ_h)
+            noise = params.torque_noise / f_n
             if u + noise < self._low or u - noise > self._high:
                 self._low, self._high, changed = min(u + noise, self._low), max(u - noise, self._high), True
         if changed:
@@ -183,5 +184,9 @@ class FaceEstimator:
 
     def _report(self) -> None:
         """The face from the evidence: its hull, ``margin`` inside."""
-        hull = (min(self._low, self._start[0]), max(self._high, self._start[1]))
+        (low, high), (start_low, start_high) = (self._low, self._high), self._start
+        hull = (  # min(low, start_low), max(high, start_high), written out: a call costs more
+            start_low if start_low < low else low,
+            start_high if start_high > high else high,
+        )
         self.face = inside(hull, self.params.margin)

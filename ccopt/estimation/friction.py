@@ -109,9 +109,12 @@ class HandFrictionEstimator:
         params = self.params
         if not (f_n > params.min_normal_force and math.isfinite(f_n) and math.isfinite(f_t)):
             return
-        ratio = max(abs(f_t) - params.tangential_allowance, 0.0) / (f_n + params.epsilon)
-        self._quantile.add(ratio)
-        self._mu_h = max(params.mu_prior, self._quantile.value)
+        excess = abs(f_t) - params.tangential_allowance
+        ratio = (0.0 if excess < 0.0 else excess) / (f_n + params.epsilon)  # max(excess, 0.0), written out
+        quantile = self._quantile
+        quantile.add(ratio)
+        value, prior = quantile.value, params.mu_prior
+        self._mu_h = value if value > prior else prior  # max(prior, value), written out
 
     def rows(self) -> tuple[np.ndarray, np.ndarray]:
         """Hand rows ``N w ≤ b`` (hand frame, ``N`` 4×3, ``b`` 4) from :data:`ccopt.contact.hand_rows`."""

@@ -153,7 +153,8 @@ class GravityEstimator:
 
     def __init__(self, params: GravityParams | None = None) -> None:
         self.params = params if params is not None else GravityParams()
-        self._epoch = (0, 0)  # the kinematics' (resets, anchor) of the current segment
+        self._resets = self._anchor = 0  # the kinematics' resets and anchor of the current segment
+        self._gate_squared = self.params.gate**2
         self.agreed: bool | None = None
         """Whether the last sample's moment about the known ground contact agreed with ``M̂``
         (:meth:`_consistent`); None where it was not judged (no sample, or the contact unknown)."""
@@ -176,13 +177,14 @@ class GravityEstimator:
         hand force in world axes where the caller has it (N; else it is made from the wrench). A
         reset of the kinematics forgets everything; a move of the ground contact (a new ``anchor``)
         ends the segment."""
-        epoch = (kinematics.resets, kinematics.anchor)
-        if epoch[0] != self._epoch[0]:
+        resets, anchor = kinematics.resets, kinematics.anchor
+        if resets != self._resets:
             self.reset()
-        elif epoch[1] != self._epoch[1]:
+        elif anchor != self._anchor:
             self.end_segment(self._contact)
-        self._epoch, self._contact = epoch, contact
-        known = math.isfinite(kinematics.rough[1]) and math.isfinite(kinematics.rough[2])  # r_o
+        self._resets, self._anchor, self._contact = resets, anchor, contact
+        rough = kinematics.rough
+        known = math.isfinite(rough[1]) and math.isfinite(rough[2])  # r_o
         self.agreed = None
         if kinematics.ground_fixed and math.isfinite(theta_o):
             sample = _moment_sample(theta_o, hand_pose, hand_wrench, force_world)
@@ -229,10 +231,10 @@ class GravityEstimator:
         c, s, moment, f_x, f_y = sample
         x_o, y_o = contact[0], contact[1]
         residual = moment + x_o * f_y - y_o * f_x - (a * c + b * s)
-        lever = math.hypot(hand_pose[0] - x_o, hand_pose[1] - y_o)
-        noise = self.params.moment_noise * max(1.0, lever / NOISE_LEVER)
+        scale = math.hypot(hand_pose[0] - x_o, hand_pose[1] - y_o) / NOISE_LEVER
+        noise = self.params.moment_noise * (scale if scale > 1.0 else 1.0)  # max(1.0, scale), written out
         variance = noise * noise + _quadratic(covariance, c, s)
-        return residual * residual <= self.params.gate**2 * variance
+        return residual * residual <= self._gate_squared * variance
 
     def _accumulate(self, c: float, s: float, moment: float, f_x: float, f_y: float) -> None:
         sums = self._sums

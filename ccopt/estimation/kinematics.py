@@ -362,7 +362,16 @@ class KinematicEstimator:
         ground_sticks = modes.ground_mode == _STICK
         hand_sticks = modes.hand_mode == _STICK
         force = 0.0 if normal_force is None else normal_force - self._reference_force
-        frame = self._object_frame(e_n, e_t, torque, force)
+        tilt = self._state[C] * torque  # the hand axes turned by −ĉ τ to the object face's
+        cos, sin = math.cos(tilt), math.sin(tilt)
+        frame = (
+            e_n[0] * cos - e_t[0] * sin,
+            e_n[1] * cos - e_t[1] * sin,
+            e_t[0] * cos + e_n[0] * sin,
+            e_t[1] * cos + e_n[1] * sin,
+            torque,
+            force,
+        )
         self._ground_slipping = self._ground_slipping and ground_may_slide
         pivot_ok, fixed, following = True, False, False
         if not in_contact:
@@ -391,21 +400,6 @@ class KinematicEstimator:
             self._follow_start, self._hand_gave, self._follow_doubt = None, False, False
         return self._estimate(in_contact and pivot_ok, torque if flush else 0.0, fixed)
 
-    def _object_frame(
-        self, e_n: Sequence[float], e_t: Sequence[float], torque: float, force: float
-    ) -> _Frame:
-        """``(ê_n, ê_t, τ, f_n − f_ref)``: the hand axes turned by ``−ĉ τ`` to the object face's."""
-        tilt = self._state[C] * torque
-        cos, sin = math.cos(tilt), math.sin(tilt)
-        return (
-            e_n[0] * cos - e_t[0] * sin,
-            e_n[1] * cos - e_t[1] * sin,
-            e_t[0] * cos + e_n[0] * sin,
-            e_t[1] * cos + e_n[1] * sin,
-            torque,
-            force,
-        )
-
     def _flush_angle(self, theta_h: float, torque: float) -> None:
         """``θ_o = θ_h − ĉ τ`` and its standard deviation from ``c``'s."""
         self._theta_o = theta_h - self._state[C] * torque
@@ -425,7 +419,8 @@ class KinematicEstimator:
         if hand_sticks and not self._s_h_released:
             prediction = self._predict(row, value)
             gate = self._hand_slip_gate_squared if hand_may_slide else self._gate_squared
-            if self._within(prediction, gate):
+            innovation = prediction[1]
+            if innovation * innovation <= gate * prediction[2]:  # _within, written out
                 if excited:
                     self._apply(prediction)
                 return
@@ -643,26 +638,22 @@ class KinematicEstimator:
         cov = self._cov
         return self._state[X_O], self._state[Y_O], cov[X_O][X_O], cov[X_O][Y_O], cov[Y_O][Y_O]
 
-    def _hand_frame_s_h(self, torque: float) -> tuple[float, float]:
-        """``s_h`` in the hand frame, ``s cos δ − d sin δ`` with ``δ = ĉ τ``, and its variance
-        (first order in ``(s, d, c)``)."""
-        state, cov = self._state, self._cov
-        s, d = state[S_H], state[D]
-        tilt = state[C] * torque
+    def _estimate(self, s_h_defined: bool, torque: float, fixed: bool) -> KinematicEstimate:
+        """The estimate of the state, with ``s_h`` in the hand frame at the torque ``τ`` (N·m) that
+        tilts the hand against the face by ``δ = ĉ τ``: ``s cos δ − d sin δ``, its variance to first
+        order in ``(s, d, c)``."""
+        d, x_o, y_o, s, compliance, normal_compliance = self._state
+        cov, valid_std = self._cov, self._valid_std
+        tilt = compliance * torque
         cos, sin = math.cos(tilt), math.sin(tilt)
         j_s, j_d, j_c = cos, -sin, -torque * (s * sin + d * cos)
         row_s, row_d, row_c = cov[S_H], cov[D], cov[C]
-        variance = (
+        s_h_variance = (
             j_s * (j_s * row_s[S_H] + j_d * row_s[D] + j_c * row_s[C])
             + j_d * (j_s * row_d[S_H] + j_d * row_d[D] + j_c * row_d[C])
             + j_c * (j_s * row_c[S_H] + j_d * row_c[D] + j_c * row_c[C])
         )
-        return s * cos - d * sin, variance
-
-    def _estimate(self, s_h_defined: bool, torque: float, fixed: bool) -> KinematicEstimate:
-        d, x_o, y_o, _, compliance, normal_compliance = self._state
-        cov, valid_std = self._cov, self._valid_std
-        s_h, s_h_variance = self._hand_frame_s_h(torque)
+        s_h = s * cos - d * sin
         sqrt, nan, rough_std = math.sqrt, math.nan, self._rough_std
         var_d, var_x, var_y, var_c = cov[D][D], cov[X_O][X_O], cov[Y_O][Y_O], cov[C][C]
         # sqrt(max(v, 0.0)), the max written out (a call costs more): NaN and -0.0 kept
