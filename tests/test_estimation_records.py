@@ -1,5 +1,6 @@
 """The estimator's per-sample objects, made by :func:`ccopt.estimation.records.record` without a check,
-hold every field of their dataclasses and equal the instances their ``__init__`` makes."""
+(the estimate, the kinematics' estimate, the ground cone) hold every field of their dataclasses and
+equal the instances their ``__init__`` makes."""
 
 from __future__ import annotations
 
@@ -27,7 +28,7 @@ def test_a_record_is_its_fields_and_frozen():
         made.mu_g = 0.6
 
 
-def test_every_estimate_and_kinematic_estimate_holds_every_field():
+def test_every_estimate_kinematic_estimate_and_ground_cone_holds_every_field():
     run = synthetic_run(0)
     estimator = Estimator()
     kinematics: list[KinematicEstimate] = []
@@ -37,6 +38,6 @@ def test_every_estimate_and_kinematic_estimate_holds_every_field():
         estimator.update(time, pose, wrench)
         for time, pose, wrench in zip(run.times[::50], run.poses[::50], run.wrenches[::50], strict=True)
     ]
-    for estimate in (estimates[0], estimates[-1], *kinematics[:1], *kinematics[-1:]):
-        _same_as_constructed(estimate)
+    for made in (estimates[0], estimates[-1], *kinematics[:1], *kinematics[-1:], estimator.ground.cone):
+        _same_as_constructed(made)
     assert all(type(estimate) is Estimate for estimate in estimates)

@@ -48,17 +48,18 @@ from __future__ import annotations
 import functools
 import itertools
 import math
+import struct
 from bisect import bisect_left, bisect_right
 from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
 
-from ccopt import validation
 from ccopt.clock import interval_passed
 from ccopt.estimation import ground_hull
 from ccopt.estimation.ground_hull import CompiledHull
 from ccopt.estimation.quantile import P2QuantileBank, check_count, check_level, check_number
+from ccopt.estimation.records import record
 from ccopt.geometry import WORLD_UP
 
 FACE_COSINE_RANGE = (math.sin(math.radians(3.0)), math.cos(math.radians(15.0)))
@@ -433,6 +434,10 @@ def _outside(ux: list[float], uy: list[float], h: list[float], k: int, point: tu
     return ux[k] * point[0] + uy[k] * point[1] > h[k]
 
 
+_CONE_VALUES = struct.Struct("10d")
+"""A cone's ``A``, ``b``, ``apex`` and ``up`` as the bytes of one read-only array (:func:`_cone`)."""
+
+
 def _cone(rows: tuple[Row2, Row2], valid: bool, fitted: tuple[bool, bool]) -> GroundCone:
     """The :class:`GroundCone` of a fit's rows (:func:`_ground_rows`)."""
     ((ax, ay), b_pos, _), ((cx, cy), b_neg, _) = rows
@@ -445,9 +450,8 @@ def _cone(rows: tuple[Row2, Row2], valid: bool, fitted: tuple[bool, bool]) -> Gr
         det = ax * cy - ay * cx
         if det != 0.0:
             apex = ((cy * b_pos - ay * b_neg) / det, (ax * b_neg - cx * b_pos) / det)
-    values = np.array((ax, ay, cx, cy, b_pos, b_neg, *apex, *up))  # A, b, apex, up: one array to make
-    values.flags.writeable = False  # read-only, and so are its views
-    return validation.trusted(  # every field, each well formed by construction
+    values = np.frombuffer(_CONE_VALUES.pack(ax, ay, cx, cy, b_pos, b_neg, *apex, *up))  # A, b, apex, up
+    return record(  # read-only, and so are its views
         GroundCone,
         {
             "A": values[:4].reshape(2, 2),
