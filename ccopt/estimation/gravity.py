@@ -205,7 +205,7 @@ class GravityEstimator:
         """The ground contact moves (a ground slide): fold this segment, with ``contact`` the last
         estimate of its ground contact, into the prior."""
         if self._samples:
-            (a, b), (paa, pab, pbb) = _solve(tuple(self._sums), self._prior, contact, self.params)
+            (a, b), (paa, pab, pbb) = _solve(self._sums, self._prior, contact, self.params)
             det = paa * pbb - pab * pab
             laa, lab, lbb = pbb / det, -pab / det, paa / det
             self._prior = (laa, lab, lbb, laa * a + lab * b, lab * a + lbb * b)
@@ -224,7 +224,7 @@ class GravityEstimator:
         again every :data:`_REFERENCE_SAMPLES` samples offered (not every sample: it moves little
         between two), with the ground contact of the time."""
         if self._reference is None or self._since_reference >= _REFERENCE_SAMPLES:
-            (a, b), covariance = _solve(tuple(self._sums), self._prior, contact, self.params)
+            (a, b), covariance = _solve(self._sums, self._prior, contact, self.params)
             self._reference, self._since_reference = (a, b, covariance), 0
         self._since_reference += 1
         a, b, covariance = self._reference
@@ -237,18 +237,20 @@ class GravityEstimator:
         return residual * residual <= self._gate_squared * variance
 
     def _accumulate(self, c: float, s: float, moment: float, f_x: float, f_y: float) -> None:
-        sums = self._sums
-        sums[0] += c * c
-        sums[1] += c * s
-        sums[2] += s * s
-        sums[3] += c * moment
-        sums[4] += s * moment
-        sums[5] += c * f_x
-        sums[6] += s * f_x
-        sums[7] += c * f_y
-        sums[8] += s * f_y
-        sums[9] += c
-        sums[10] += s
+        aa, ab, bb, mc, ms, xc, xs, yc, ys, kc, ks = self._sums
+        self._sums = (  # a tuple made anew (not 11 items stored): each estimate keeps the one of its time
+            aa + c * c,
+            ab + c * s,
+            bb + s * s,
+            mc + c * moment,
+            ms + s * moment,
+            xc + c * f_x,
+            xs + s * f_x,
+            yc + c * f_y,
+            ys + s * f_y,
+            kc + c,
+            ks + s,
+        )
         self._samples += 1
         self._informed = True
 
@@ -258,12 +260,10 @@ class GravityEstimator:
         """The estimate with ``contact`` the current ground contact estimate (None: unknown)."""
         if contact is None or not self._informed:
             return UNKNOWN
-        return GravityEstimate(
-            (tuple(self._sums), self._prior, contact, theta_o, kinematics_valid, self.params)
-        )
+        return GravityEstimate((self._sums, self._prior, contact, theta_o, kinematics_valid, self.params))
 
     def _clear_segment(self) -> None:
-        self._sums = [0.0] * 11  # Σ φφᵀ (3), Σ φ m (2), Σ φ f_x (2), Σ φ f_y (2), Σ φ (2)
+        self._sums = (0.0,) * 11  # Σ φφᵀ (3), Σ φ m (2), Σ φ f_x (2), Σ φ f_y (2), Σ φ (2)
         self._samples = 0
         self._reference: tuple[float, float, tuple[float, float, float]] | None = None  # (a, b, P)
         self._since_reference = 0  # samples offered since it was solved

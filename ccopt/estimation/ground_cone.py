@@ -524,10 +524,12 @@ def _face_ends(
     return vertices[(start - 1) % count], vertices[end % count]
 
 
+@functools.lru_cache(maxsize=64)
 def _face_row(ends: FaceEnds) -> Row2 | None:
     """The row of a friction face's ``ends`` (:func:`_face_ends`): their chord, turned through the
     origin where it crosses "up" below it (:func:`_through_origin`); None where the chord has no
-    length or its normal is outside :data:`FACE_COSINE_RANGE`."""
+    length or its normal is outside :data:`FACE_COSINE_RANGE`. Cached: in half the fits or more of a
+    closed-loop run, a side's face ends where it did in an earlier fit."""
     (up_x, up_y), (low, high) = WORLD_UP, FACE_COSINE_RANGE
     row = _chord(*ends)
     if row is not None and row[1] < 0.0:

@@ -121,8 +121,13 @@ def _step(heights: list[float], positions: list[float], levels: list[float], sam
         cell = 2
     else:
         cell = 3
-    for marker in range(cell + 1, N_MARKERS):
-        positions[marker] += 1.0
+    if cell < 1:  # the markers above the sample's cell move up: cell + 1 .. 4, unrolled
+        positions[1] += 1.0
+    if cell < 2:
+        positions[2] += 1.0
+    if cell < 3:
+        positions[3] += 1.0
+    positions[4] += 1.0
     top = positions[4]
     for marker in (1, 2, 3):
         lag = top * levels[marker] - positions[marker]
