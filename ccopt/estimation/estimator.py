@@ -307,7 +307,7 @@ class Estimator:
         self._contact_force = self.params.contact_force
         self._theta_noise = self.params.theta_filter.noise
         self._split_tilt = self.params.kinematics.split_tilt
-        self._last_reports: tuple = (None,) * 5  # (likely, commanded, unobservable, ground, reports)
+        self._last_reports: tuple = (None,) * 5  # (likely, commanded, unobservable, ground or None, reports)
         self._cone_ground: GroundCone | None = None
         self._patch: tuple[float, float] | None = None  # the known face on the hand (known_patch)
         self._mismatch: tuple[int, float, float, int] | None = None  # samples, least/largest θ_o, resets
@@ -528,14 +528,21 @@ class Estimator:
         """``(modes, ground_may_slide, hand_may_slide, both)`` for the kinematics
         (:func:`_kinematic_reports`, the modes through :func:`kinematic_modes` unless both may slide).
         The last inputs and reports are kept: the configurations and the cone are immutable, and the
-        same objects for many samples in a row."""
+        same objects for many samples in a row; the cone counts only where :func:`kinematic_modes`
+        reads it (a ground-slide report), so a refit leaves the other reports as they were."""
         unobservable = self._split_unobservable(theta_h)
         last = self._last_reports
-        if likely is last[0] and commanded is last[1] and unobservable == last[2] and ground is last[3]:
+        if (
+            likely is last[0]
+            and commanded is last[1]
+            and unobservable == last[2]
+            and (last[3] is None or ground is last[3])
+        ):
             return last[4]
         kept, ground_may_slide, hand_may_slide, both = _kinematic_reports(likely, commanded, unobservable)
         reports = (kept if both else kinematic_modes(kept, ground), ground_may_slide, hand_may_slide, both)
-        self._last_reports = (likely, commanded, unobservable, ground, reports)
+        read = not both and kept.ground_mode != _STICK
+        self._last_reports = (likely, commanded, unobservable, ground if read else None, reports)
         return reports
 
     def _split_unobservable(self, theta_h: float) -> bool:
