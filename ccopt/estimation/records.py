@@ -1,11 +1,12 @@
 """The estimator's per-sample frozen dataclasses, made at the cost of one dict.
 
 :func:`ccopt.validation.trusted` makes an instance without its ``__init__`` and checks that the
-fields given are every field, by their key set: 0.3 µs of the estimator's 34 fields, a tenth of a
-sample's estimate. The estimator's objects are made from dict literals that name every field, so
-the check cannot fail at run time; :func:`record` leaves it out (``tests/test_estimation_records.py``
-holds the literals to their dataclasses instead). Only for those literals: anywhere else,
-:func:`~ccopt.validation.trusted`.
+fields given are every field, by their key set: 0.3-0.5 µs for the estimate's 34 fields, more than
+making the instance itself (replaying a smoke run, about 1 µs a sample over the estimate, the
+kinematics' estimate and the ground cone). These are made from dict literals that name every
+field, so the check cannot fail at run time; :func:`record` leaves it out
+(``tests/test_estimation_records.py`` holds the literals to their dataclasses instead). Only for
+such literals: anywhere else, :func:`~ccopt.validation.trusted`.
 """
 
 from __future__ import annotations
