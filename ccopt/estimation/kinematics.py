@@ -589,16 +589,22 @@ class KinematicEstimator:
     def _predict(self, row: _Row, value: float) -> _Prediction:
         """``(P hᵀ, innovation, innovation variance)`` of one measurement ``row · x = value``."""
         h0, h1, h2, h3, h4, h5 = row
-        s = self._state
-        r0, r1, r2, r3, r4, r5 = self._cov  # P hᵀ, unrolled (a generator costs more than the sums)
-        c0 = r0[0] * h0 + r0[1] * h1 + r0[2] * h2 + r0[3] * h3 + r0[4] * h4 + r0[5] * h5
-        c1 = r1[0] * h0 + r1[1] * h1 + r1[2] * h2 + r1[3] * h3 + r1[4] * h4 + r1[5] * h5
-        c2 = r2[0] * h0 + r2[1] * h1 + r2[2] * h2 + r2[3] * h3 + r2[4] * h4 + r2[5] * h5
-        c3 = r3[0] * h0 + r3[1] * h1 + r3[2] * h2 + r3[3] * h3 + r3[4] * h4 + r3[5] * h5
-        c4 = r4[0] * h0 + r4[1] * h1 + r4[2] * h2 + r4[3] * h3 + r4[4] * h4 + r4[5] * h5
-        c5 = r5[0] * h0 + r5[1] * h1 + r5[2] * h2 + r5[3] * h3 + r5[4] * h4 + r5[5] * h5
+        r0, r1, r2, r3, r4, r5 = self._cov  # P hᵀ unrolled, a row unpacked once (an index a term costs more)
+        p0, p1, p2, p3, p4, p5 = r0
+        c0 = p0 * h0 + p1 * h1 + p2 * h2 + p3 * h3 + p4 * h4 + p5 * h5
+        p0, p1, p2, p3, p4, p5 = r1
+        c1 = p0 * h0 + p1 * h1 + p2 * h2 + p3 * h3 + p4 * h4 + p5 * h5
+        p0, p1, p2, p3, p4, p5 = r2
+        c2 = p0 * h0 + p1 * h1 + p2 * h2 + p3 * h3 + p4 * h4 + p5 * h5
+        p0, p1, p2, p3, p4, p5 = r3
+        c3 = p0 * h0 + p1 * h1 + p2 * h2 + p3 * h3 + p4 * h4 + p5 * h5
+        p0, p1, p2, p3, p4, p5 = r4
+        c4 = p0 * h0 + p1 * h1 + p2 * h2 + p3 * h3 + p4 * h4 + p5 * h5
+        p0, p1, p2, p3, p4, p5 = r5
+        c5 = p0 * h0 + p1 * h1 + p2 * h2 + p3 * h3 + p4 * h4 + p5 * h5
         variance = c0 * h0 + c1 * h1 + c2 * h2 + c3 * h3 + c4 * h4 + c5 * h5 + self._noise_variance
-        innovation = value - (s[0] * h0 + s[1] * h1 + s[2] * h2 + s[3] * h3 + s[4] * h4 + s[5] * h5)
+        s0, s1, s2, s3, s4, s5 = self._state
+        innovation = value - (s0 * h0 + s1 * h1 + s2 * h2 + s3 * h3 + s4 * h4 + s5 * h5)
         return (c0, c1, c2, c3, c4, c5), innovation, variance
 
     def _apply(self, prediction: _Prediction) -> None:
@@ -647,21 +653,24 @@ class KinematicEstimator:
         tilt = compliance * torque
         cos, sin = math.cos(tilt), math.sin(tilt)
         j_s, j_d, j_c = cos, -sin, -torque * (s * sin + d * cos)
-        row_s, row_d, row_c = cov[S_H], cov[D], cov[C]
+        var_d, _, _, cov_ds, cov_dc, _ = cov[D]  # rows unpacked in state order (d, x_o, y_o, s_h, c, k)
+        cov_sd, _, _, var_s, cov_sc, _ = cov[S_H]
+        cov_cd, _, _, cov_cs, var_c, _ = cov[C]
         s_h_variance = (
-            j_s * (j_s * row_s[S_H] + j_d * row_s[D] + j_c * row_s[C])
-            + j_d * (j_s * row_d[S_H] + j_d * row_d[D] + j_c * row_d[C])
-            + j_c * (j_s * row_c[S_H] + j_d * row_c[D] + j_c * row_c[C])
+            j_s * (j_s * var_s + j_d * cov_sd + j_c * cov_sc)
+            + j_d * (j_s * cov_ds + j_d * var_d + j_c * cov_dc)
+            + j_c * (j_s * cov_cs + j_d * cov_cd + j_c * var_c)
         )
         s_h = s * cos - d * sin
         sqrt, nan, rough_std = math.sqrt, math.nan, self._rough_std
-        var_d, var_x, var_y, var_c = cov[D][D], cov[X_O][X_O], cov[Y_O][Y_O], cov[C][C]
+        var_x, var_y = cov[X_O][X_O], cov[Y_O][Y_O]
         # sqrt(max(v, 0.0)), the max written out (a call costs more): NaN and -0.0 kept
         std_d, std_x = sqrt(0.0 if var_d < 0.0 else var_d), sqrt(0.0 if var_x < 0.0 else var_x)
         std_y, std_s = sqrt(0.0 if var_y < 0.0 else var_y), sqrt(0.0 if s_h_variance < 0.0 else s_h_variance)
         if not s_h_defined:
             s_h = nan
-        contact_valid = max(std_d, std_x, std_y) <= valid_std
+        largest = std_x if std_x > std_d else std_d  # max(std_d, std_x, std_y), written out (NaN as max)
+        contact_valid = (std_y if std_y > largest else largest) <= valid_std
         s_h_valid = s_h_defined and contact_valid and std_s <= valid_std
         theta_o_valid = self._theta_o_valid
         return record(
