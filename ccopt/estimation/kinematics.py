@@ -669,7 +669,7 @@ class KinematicEstimator:
         std_y, std_s = sqrt(0.0 if var_y < 0.0 else var_y), sqrt(0.0 if s_h_variance < 0.0 else s_h_variance)
         if not s_h_defined:
             s_h = nan
-        largest = std_x if std_x > std_d else std_d  # max(std_d, std_x, std_y), written out (NaN as max)
+        largest = std_x if std_x > std_d else std_d  # max(std_d, std_x, std_y) written out, as max compares
         contact_valid = (std_y if std_y > largest else largest) <= valid_std
         s_h_valid = s_h_defined and contact_valid and std_s <= valid_std
         theta_o_valid = self._theta_o_valid
