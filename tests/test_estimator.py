@@ -17,6 +17,8 @@ from ccopt.estimation import (
     commanded_modes,
     replay,
 )
+from ccopt.estimation.estimator import kinematic_modes
+from ccopt.estimation.ground_cone import GroundCone
 from ccopt.hand import Hand
 from ccopt.modes import ContactConfiguration, ContactMode, HandGeometry
 
@@ -290,3 +292,23 @@ def test_a_sticking_command_lets_the_kinematics_converge_through_conservative_ha
 def test_the_moment_checks_parameters_are_refused_naming_the_field(field, value, error):
     with pytest.raises(error, match=field):
         EstimatorParams(**{field: value})
+
+
+def _cone(fitted: tuple[bool, bool]) -> GroundCone:
+    rows, nan = np.array([[0.8, 0.6], [-0.8, 0.6]]), np.full(2, np.nan)
+    return GroundCone(rows, np.zeros(2), True, fitted, math.nan, nan, np.array(geometry.WORLD_UP))
+
+
+@pytest.mark.parametrize(
+    "ground_mode", [ContactMode.STICK, ContactMode.SLIDE_POS, ContactMode.SLIDE_NEG], ids=lambda m: m.name
+)
+def test_the_kinematics_reports_follow_a_refit_of_the_ground_rows(ground_mode):
+    """The reports the kinematics work under are kept from sample to sample (the inputs are the same
+    objects for long stretches) and through a refit of the ground rows where they do not read them;
+    after each refit they are what :func:`kinematic_modes` makes of the new rows."""
+    estimator = Estimator(Hand(half_length=L_H))
+    likely = ContactConfiguration(ContactMode.STICK, HandGeometry.FLUSH, ground_mode)
+    for fitted in [(False, False), (True, True), (False, False), (True, False), (False, True)]:
+        cone = _cone(fitted)
+        modes = estimator._reports(likely, None, 0.3, cone)[0]
+        assert modes == kinematic_modes(likely, cone), (fitted, modes)
