@@ -88,7 +88,7 @@ _STICK = ContactMode.STICK
 def _flat_cone_rows() -> BufferedFunction:
     """:data:`ccopt.contact.cone_rows` and the margins ``b − N w`` on one flat input
     ``(θ_h, μ_h, l_h, vec(A) (column-major), b, w)`` with one flat output ``(N row by row, b, b − N w)``,
-    for :meth:`BufferedFunction.call_flat`."""
+    evaluated in the calling thread's buffers (:meth:`BufferedFunction.buffers`)."""
     flat = ca.SX.sym("cone_input", 12)
     n_rows, b = contact.cone_rows(flat[0], flat[1], flat[2], ca.reshape(flat[3:7], 2, 2), flat[7:9])
     output = ca.vertcat(ca.vec(n_rows.T), b, b - n_rows @ flat[9:12])

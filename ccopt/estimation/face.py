@@ -157,7 +157,7 @@ class FaceEstimator:
             self._start, changed = hand_extent(self.half_length, s_h), True
         params = self.params
         if flush and f_n >= params.min_normal_force:
-            u = -torque / f_n - s_h  # geometry.face_position(geometry.centre_of_pressure(f_n, τ), ŝ_h)
+            u = geometry.face_position(geometry.centre_of_pressure(f_n, torque), s_h)
             noise = params.torque_noise / f_n
             if u + noise < self._low or u - noise > self._high:
                 self._low, self._high, changed = min(u + noise, self._low), max(u - noise, self._high), True
