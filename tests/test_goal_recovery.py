@@ -36,6 +36,14 @@ and the experimenter's oracle (the planner on the true object). Goals-study obje
   (:meth:`ccopt.estimation.estimator.Estimator._drop_unfounded_slide`; seed 6, trial 34, run with
   noise seed 10: since the exploration's pivots about the naive lever were paced, the trial's own
   noise seed no longer makes the case, and of noise seeds 0–39 only 10 does).
+* **Ground slides that did not start, given up too soon.** A pentagon's ground slides towards
+  −s_g timed out at 2.8° and at −11.4°; each failure moved the next slide half a pivot step on, and
+  after the second no tilt was left within the limits: the goal was reported unreachable, though
+  the oracle reaches it. A slide sought past the sticking forces seen moves their edge out, so a
+  second try where it failed pushes further; at −11.4° it slid the ground 10 mm
+  (:meth:`~ccopt.planning.sequencer.GoalSequencer._failed_slide`; seed 7, trial 11). Not a cure:
+  on noise seeds 0–11 the goal is reached on 7 with the retry or without, and on the other 5 the
+  retry times out too and the goal ends ``failed`` instead of ``unreachable``.
 * **A roll over the face's end, unseen.** A sliver's ground slides with the hand 9 mm past the
   ground contact moved the centre of pressure to the face's end, well inside the hand, and the
   object turned 17° under the hand with the hand's torque rows far from tight
@@ -44,6 +52,7 @@ and the experimenter's oracle (the planner on the true object). Goals-study obje
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -55,6 +64,7 @@ from ccopt.estimation.kinematics import KinematicsParams
 from ccopt.experiment import Experiment, run_experiment
 from ccopt.metrics import sample_at
 from ccopt.objects import from_vertices
+from ccopt.planning.planner import PlannerParams
 from ccopt.schedule import DEFAULT_TOLERANCE, Schedule, exploration, reach
 
 LOW_GOAL_DEG = 2.788733853924695
@@ -128,6 +138,40 @@ def test_ground_slides_lost_near_the_vertical_are_sought_past_it_and_the_goal_re
 
 
 @pytest.fixture(scope="module")
+def held_slides() -> Experiment:
+    vertices = [[0.0685777615177403, 0.03425512571803571], [-0.07604556949807133, -0.010776546402522114],
+                [-0.03093288287362771, -0.06748630862908002], [0.005215231645633909, -0.072497318074799],
+                [0.05750978997588445, -0.04162022777628418]]
+    goals = (reach(theta_deg=LOW_GOAL_DEG, s_g_mm=-10.0),)
+    return run(vertices, 0.24250409362792477, 0.37361688972255136, 0.45147704590538706, goals, 199829066)
+
+
+def test_a_ground_slide_that_did_not_start_is_tried_again_where_it_failed(held_slides) -> None:
+    """The case: a goal's ground slide ended ``timeout`` and the next one, within half a pivot step
+    of the same tilt by the truth, moved the ground by most of its command. The goal, which the
+    oracle reaches, is reached within its tolerance by the truth."""
+    result, summary = held_slides.result, held_slides.summary
+    theta = np.degrees(np.asarray(result.samples["true_coordinates"])[:, 0])
+    s_g = np.asarray(result.samples["true_coordinates"])[:, 2]
+    slides = [s for s in result.steps if s.goal is not None and s.kind == "slide_ground"]
+    half_step = 0.5 * math.degrees(PlannerParams().pivot_step)
+
+    def at(time: float) -> int:
+        return sample_at(result.samples, time)
+
+    retried = [
+        (failed, again) for failed, again in itertools.pairwise(slides)
+        if failed.status == "timeout"
+        and abs(theta[at(again.start_time)] - theta[at(failed.start_time)]) <= half_step
+        and abs(s_g[at(again.end_time)] - s_g[at(again.start_time)]) >= 0.5 * abs(again.delta)
+    ]
+    assert retried
+    goal = summary["goals"][0]
+    assert goal["oracle"]["reachable"]
+    assert goal["status"] == "reached" and goal["within_tolerance"], goal
+
+
+@pytest.fixture(scope="module")
 def rolled_over_the_face_end() -> Experiment:
     vertices = [[0.032486014959909715, 0.011555802769146526], [-0.03497957493910002, 0.020580763226844913],
                 [-0.034678190839134766, -0.015371360201069077]]
@@ -168,9 +212,10 @@ PENTAGON_GOALS = (reach(s_g_mm=-10.0),)
 @pytest.mark.parametrize("checked", [True, False], ids=["moment checked", "unchecked"])
 def test_kinematics_the_moment_balance_contradicts_are_learned_anew(checked: bool) -> None:
     """The case (goals seed 2, trial 1, noise seed 0): unchecked (the check's sample count out of
-    reach), the wrong kinematics claimed the ``s_g`` goal outside its tolerance by the truth (16.3 mm
-    off). Checked, they are reset and learned again by exploring, and every goal is reached within
-    its tolerance by the truth (0.9 mm off)."""
+    reach), the wrong kinematics do not reach the ``s_g`` goal: they claimed it 16.3 mm off by the
+    truth, and since a ground slide that did not start is tried again where it failed, the goal
+    fails 52 mm off. Checked, they are reset and learned again by exploring, and every goal is
+    reached within its tolerance by the truth (0.9 mm off)."""
     estimator = EstimatorParams() if checked else EstimatorParams(moment_mismatch_samples=10**9)
     params = LoopParams(estimator_params=estimator)
     summary = run(*TURNED_PENTAGON, PENTAGON_GOALS, 0, params).summary
@@ -178,7 +223,7 @@ def test_kinematics_the_moment_balance_contradicts_are_learned_anew(checked: boo
     if checked:
         assert all(g["status"] == "reached" and g["within_tolerance"] for g in goals), goals
     else:
-        assert any(g["status"] == "reached" and not g["within_tolerance"] for g in goals), goals
+        assert not any(g["status"] == "reached" and g["within_tolerance"] for g in goals), goals
 
 
 HEAVY_QUADRILATERAL = (
