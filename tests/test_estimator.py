@@ -283,6 +283,8 @@ def test_a_sticking_command_lets_the_kinematics_converge_through_conservative_ha
         ("moment_mismatch_tilt", True, TypeError),
         ("moment_mismatch_samples", 0, ValueError),
         ("moment_mismatch_samples", 2.5, TypeError),
+        ("moment_doubt_tilt", 0.0, ValueError),
+        ("moment_doubt_tilt", "0.03", TypeError),
         ("hand_give", -1e-3, ValueError),
         ("hand_give", math.inf, ValueError),
         ("hand_give_filter", 0.0, ValueError),

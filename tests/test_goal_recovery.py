@@ -44,6 +44,11 @@ and the experimenter's oracle (the planner on the true object). Goals-study obje
   (:meth:`~ccopt.planning.sequencer.GoalSequencer._failed_slide`; seed 7, trial 11). Not a cure:
   on noise seeds 0–11 the goal is reached on 7 with the retry or without, and on the other 5 the
   retry times out too and the goal ends ``failed`` instead of ``unreachable``.
+* **An object rocking over a ground face, unseen.** Pivots across a pentagon's ground face near 0°
+  rock it onto the next vertex and back (the true ground contact jumps 34 mm each way); the
+  kinematics stay on the first vertex, and the moment check, which resets them only after 5° of
+  turning, was too slow: an ``s_h`` goal was claimed 30 mm off by the truth. Doubted over 2°
+  (``Estimate.kinematics_doubted``), the goal is not claimed (seed 6, trial 1).
 * **A roll over the face's end, unseen.** A sliver's ground slides with the hand 9 mm past the
   ground contact moved the centre of pressure to the face's end, well inside the hand, and the
   object turned 17° under the hand with the hand's torque rows far from tight
@@ -65,7 +70,8 @@ from ccopt.experiment import Experiment, run_experiment
 from ccopt.metrics import sample_at
 from ccopt.objects import from_vertices
 from ccopt.planning.planner import PlannerParams
-from ccopt.schedule import DEFAULT_TOLERANCE, Schedule, exploration, reach
+from ccopt.planning.sequencer import DOUBTED
+from ccopt.schedule import DEFAULT_TOLERANCE, GOAL_TOLERANCE, Schedule, exploration, reach
 
 LOW_GOAL_DEG = 2.788733853924695
 PIVOT_TOLERANCE_DEG = math.degrees(DEFAULT_TOLERANCE["pivot"])
@@ -224,6 +230,36 @@ def test_kinematics_the_moment_balance_contradicts_are_learned_anew(checked: boo
         assert all(g["status"] == "reached" and g["within_tolerance"] for g in goals), goals
     else:
         assert not any(g["status"] == "reached" and g["within_tolerance"] for g in goals), goals
+
+
+ROCKING_PENTAGON = (
+    ((0.04489352415840628, 0.02161674190387873), (-0.028277780412668416, 0.045248196596133314),
+     (-0.052373656318454025, 0.01038432047364983), (-0.0454304814998695, -0.04194200352361469),
+     (-0.01277777739196946, -0.050537663871827315)),
+    0.6708027861111525, 0.4884627090484549, 0.8946395170384869,
+)
+ROCKING_GOALS = (
+    reach(theta_deg=31.588733853924694, s_g_mm=10.0), reach(theta_deg=9.988733853924696),
+    reach(s_g_mm=-10.0), reach(s_h_mm=-10.0),
+)
+
+
+@pytest.mark.parametrize("doubting", [True, False], ids=["doubted", "undoubted"])
+def test_positions_the_moment_balance_contradicts_are_not_claimed(doubting: bool) -> None:
+    """The case (goals seed 6, trial 1): the ``s_h`` goal, reached by the estimate after a pivot
+    that rocked the pentagon onto its next vertex. Undoubted (``moment_doubt_tilt`` at the reset's
+    tilt, so the kinematics are never doubted short of a reset), it is claimed reached, off by the
+    truth by more than its tolerance. Doubted, it ends ``failed``, the balance named, and by the
+    truth it is indeed outside its tolerance."""
+    tilt = EstimatorParams().moment_mismatch_tilt
+    estimator = EstimatorParams() if doubting else EstimatorParams(moment_doubt_tilt=tilt)
+    params = LoopParams(estimator_params=estimator)
+    goal = run(*ROCKING_PENTAGON, ROCKING_GOALS, 4186225163, params).summary["goals"][3]
+    assert abs(goal["true_error"]["s_h_mm"]) > 1e3 * GOAL_TOLERANCE[1], goal
+    if doubting:
+        assert goal["status"] == "failed" and goal["reason"] == DOUBTED, goal
+    else:
+        assert goal["status"] == "reached", goal
 
 
 HEAVY_QUADRILATERAL = (
