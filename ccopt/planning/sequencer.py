@@ -89,7 +89,8 @@ DOUBTED = (
 """Why a goal on ``s_h`` or ``s_g`` whose estimate is within its tolerance is not claimed
 (:attr:`~ccopt.estimation.estimator.Estimate.kinematics_doubted`; see the module docstring)."""
 HELD = ("rolled", "timeout")
-"""How a hand slide ends when the hand held against it and the object stayed put."""
+"""How a slide ends when it did not start: the hand held against it (a hand slide) or the ground
+did (a ground slide), and the object stayed put."""
 
 
 @dataclass(frozen=True)
@@ -154,7 +155,7 @@ class GoalSequencer:
     max_explorations = 3
     max_hand_slide_failures = 3
     lost_slide_tries = 2
-    hand_slide_tries_per_tilt = 2
+    slide_tries_per_tilt = 2
 
     def __init__(
         self,
@@ -320,8 +321,9 @@ class GoalSequencer:
         as failed (:attr:`failed_slides`: :func:`~ccopt.planning.planner.next_motion` seeks the next
         one at least half a pivot step further that way).
 
-        A slide that did not start (:data:`HELD`) is first tried once more within half a pivot step
-        of where it failed (:attr:`held_slides`). A slide not yet known to be possible is sought
+        A slide that did not start (:data:`HELD`) is tried :attr:`slide_tries_per_tilt` times in all
+        within half a pivot step of where it failed (:attr:`held_slides`), as a hand slide is
+        (:meth:`_barred`). A slide not yet known to be possible is sought
         past the sticking forces seen by the push (:func:`~ccopt.control.targets.estimated_statics`),
         and its own forces move that edge out: the retry pushes further. On the goals study
         (seed 7, trial 11) a pentagon's ground slides towards −s_g timed out at 2.8° and −11.4°,
@@ -354,8 +356,8 @@ class GoalSequencer:
         failed (seed 1, trial 27; reached with 3)."""
         if status in HELD:
             held = self.held_slides.setdefault(way, [])
-            if not any(abs(tilt - other) <= 0.5 * self.params.pivot_step for other in held):
-                held.append(tilt)
+            held.append(tilt)
+            if self._near(held, tilt) < self.slide_tries_per_tilt:
                 return
         band = self.split_tilt + PIVOT_TOLERANCE
         if status != "lost" or not estimate.hand_slid or abs(tilt) > band:
@@ -368,7 +370,7 @@ class GoalSequencer:
         self.failed_slides[way] = edge if jump else tilt
 
     def _barred(self, theta: float, motion: Motion) -> bool:
-        """Whether ``motion`` failed :attr:`hand_slide_tries_per_tilt` times within half a pivot
+        """Whether ``motion`` failed :attr:`slide_tries_per_tilt` times within half a pivot
         step of the tilt ``theta`` (rad), or :attr:`max_hand_slide_failures` times in all.
 
         A hand slide that failed is evidence the estimated statics lack: until the hand slides,
@@ -387,8 +389,11 @@ class GoalSequencer:
         tilts = self.failed_hand_slides.get(int(configuration(motion).hand_mode), ())
         if len(tilts) >= self.max_hand_slide_failures:
             return True
-        near = sum(abs(theta - tilt) < 0.5 * self.params.pivot_step for tilt in tilts)
-        return near >= self.hand_slide_tries_per_tilt
+        return self._near(tilts, theta) >= self.slide_tries_per_tilt
+
+    def _near(self, tilts: list[float] | tuple[float, ...], theta: float) -> int:
+        """How many of ``tilts`` (rad) lie within half a pivot step of ``theta`` (rad)."""
+        return sum(abs(theta - tilt) < 0.5 * self.params.pivot_step for tilt in tilts)
 
     def _failures(self) -> str:
         """The failed hand slides and the ground slides lost where the pose cannot tell them from a
