@@ -448,7 +448,9 @@ class _StepTracker:
         ``hand_angle`` (rad), recorded ``skipped`` where it does not run); None at the end of the
         schedule."""
         if self.goal is not None:
-            answer = self.goal.next(now, estimate, self.s_g_origin, last, self.roll_tilt, self.held_tilts)
+            answer = self.goal.next(
+                now, estimate, self.s_g_origin, last, self.roll_tilt, self.held_tilts, hand_angle
+            )
             if isinstance(answer, Step):
                 return answer
             self.goal_results.append(answer)
@@ -470,7 +472,7 @@ class _StepTracker:
             if self.sequencer is None:
                 raise ValueError(f"step {self.index + 1} is a goal but the loop has no planner")
             self.goal = self.sequencer(self.index, item, now)
-            answer = self.goal.next(now, estimate, self.s_g_origin)
+            answer = self.goal.next(now, estimate, self.s_g_origin, hand_angle=hand_angle)
             if isinstance(answer, Step):
                 return answer
             self.goal_results.append(answer)

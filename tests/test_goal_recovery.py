@@ -49,6 +49,11 @@ and the experimenter's oracle (the planner on the true object). Goals-study obje
   kinematics stay on the first vertex, and the moment check, which resets them only after 5° of
   turning, was too slow: an ``s_h`` goal was claimed 30 mm off by the truth. Doubted over 2°
   (``Estimate.kinematics_doubted``), the goal is not claimed (seed 6, trial 1).
+* **A pivot to the end of the robot's reach.** On the Panda plant, whose hand reaches up to 29.7°,
+  the paper triangle's ground slide towards +s_g rolled at 24.1° and the planner pivoted to the end
+  of the reach in ``θ_o``; the hand, tilted 0.26° against the face by the pad's compliance, would
+  have ended past it, so both pivots were refused and the goal failed
+  (:meth:`ccopt.planning.sequencer.GoalSequencer.next`; the paper goals' third goal).
 * **A roll over the face's end, unseen.** A sliver's ground slides with the hand 9 mm past the
   ground contact moved the centre of pressure to the face's end, well inside the hand, and the
   object turned 17° under the hand with the hand's torque rows far from tight
@@ -68,7 +73,7 @@ from ccopt.estimation.estimator import Estimator, EstimatorParams
 from ccopt.estimation.kinematics import KinematicsParams
 from ccopt.experiment import Experiment, run_experiment
 from ccopt.metrics import sample_at
-from ccopt.objects import from_vertices
+from ccopt.objects import from_vertices, make_object
 from ccopt.planning.planner import PlannerParams
 from ccopt.planning.sequencer import DOUBTED
 from ccopt.schedule import DEFAULT_TOLERANCE, GOAL_TOLERANCE, Schedule, exploration, reach
@@ -327,3 +332,22 @@ def test_a_lost_ground_slide_that_slid_the_hand_teaches_nothing_of_the_ground(
         assert goal["status"] == "reached" and goal["within_tolerance"], goal
     else:
         assert goal["status"] == "unreachable", goal
+
+
+def test_a_pivot_planned_to_the_end_of_the_robots_reach_is_not_refused() -> None:
+    """The case: a goal's pivot ends within a pivot's tolerance of the reach's upper end by the
+    truth's hand angle, and inside it. No step is refused as beyond the reach, and the ``s_g`` goal,
+    which the oracle reaches, is reached within its tolerance by the truth."""
+    goals = (reach(theta_deg=24.4), reach(s_g_mm=10.0))
+    schedule = Schedule("reach-end", (*exploration(), *goals))
+    done = run_experiment(make_object("paper-triangle"), schedule, LoopParams(plant="panda"), seed=0)
+    high = done.result.hand_angle_range[1]
+    hand = np.asarray(done.result.samples["true_hand_pose"])[:, 2]
+    ends = [
+        hand[sample_at(done.result.samples, s.end_time)] for s in done.result.steps
+        if s.goal is not None and s.kind == "pivot" and s.status == "reached"
+    ]
+    assert any(0.0 <= high - end < DEFAULT_TOLERANCE["pivot"] for end in ends), np.degrees([*ends, high])
+    assert not any("reach" in s.reason for s in done.result.steps)
+    goal = done.summary["goals"][1]
+    assert goal["oracle"]["reachable"] and goal["status"] == "reached" and goal["within_tolerance"], goal

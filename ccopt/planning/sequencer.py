@@ -141,7 +141,8 @@ class GoalSequencer:
         index: the goal's position in the schedule.
         goal: the goal.
         start_time: when it begins, s.
-        reach: the hand angles the robot reaches (rad): the flush face's ``θ_o``.
+        reach: the hand angles ``θ_h`` the robot reaches (rad); plans keep the face's ``θ_o``
+            within them less the hand's tilt against the face when planned (see :meth:`next`).
         aim: force limits and margin of the estimated statics (:class:`~ccopt.control.targets.TargetGoal`;
             its headroom narrows the planner's force range, its friction step is the exploration).
         params: the planner's parameters.
@@ -196,6 +197,7 @@ class GoalSequencer:
         self._explored_last: Step | None = None  # the exploration's last step (run or skipped)
         self.explorations = 0
         self._last: tuple[Step, float] | None = None  # the last motion and the tilt it began at
+        self._hand_tilt = 0.0  # θ_h − θ̂_o (rad) when the next motion was asked for
 
     def next(
         self,
@@ -205,12 +207,23 @@ class GoalSequencer:
         last_status: str | None = None,
         roll_tilt: float | None = None,
         held_tilts: tuple[float, float] | None = None,
+        hand_angle: float | None = None,
     ) -> Step | GoalResult:
         """The next motion, or how the goal ended; ``last_status`` is how the previous motion of this
         goal ended (None at the start), ``roll_tilt`` the estimated ``θ_o`` (rad) where a pivot that
         ended ``rolled`` was first seen rolling (None: unknown), ``held_tilts`` the range of
         estimated ``θ_o`` (rad) at which pivots left the object on the vertex it is on now (None:
-        unknown; :meth:`_rolled`)."""
+        unknown; :meth:`_rolled`), ``hand_angle`` the measured ``θ_h`` (rad; None: taken as
+        ``θ̂_o``).
+
+        A pivot turns the hand from ``θ_h``, and the robot's reach bounds where the hand ends, not
+        the face: the hand stands tilted against the face by the pad's compliance under the torque
+        (``θ_h − θ̂_o``, a few tenths of a degree), so a plan to the end of the reach in ``θ_o`` asked
+        the hand past it, and the step was refused (the paper triangle on the Panda plant, whose
+        reach ends at 29.7°: two pivots to 29.8° refused, ``θ_h`` 29.9° and 30.2°, and the goal
+        failed)."""
+        hand_tilt = hand_angle - float(estimate.theta_o) if hand_angle is not None else 0.0
+        self._hand_tilt = hand_tilt if math.isfinite(hand_tilt) else 0.0
         self.misses = 0 if last_status in (None, "reached") else self.misses + 1
         if self._last is not None and last_status not in (None, "reached"):
             step, tilt = self._last
@@ -410,8 +423,9 @@ class GoalSequencer:
         return f" ({'; '.join(parts)})" if parts else ""
 
     def _reach(self) -> tuple[float, float]:
-        """The robot's reach, cut at the tilts where a pivot rolled the hand."""
-        low, high = self.reach
+        """The robot's reach in ``θ_o`` (less the hand's tilt against the face, :meth:`next`), cut at
+        the tilts where a pivot rolled the hand."""
+        low, high = (limit - self._hand_tilt for limit in self.reach)
         low, high = max(low, self.tilt_limits.get(-1, low)), min(high, self.tilt_limits.get(1, high))
         return min(low, high), high
 
