@@ -384,14 +384,16 @@ class _StepTracker:
         """End the motion under way with ``status`` and start the next one; its progress coordinates
         (None at the end of the schedule)."""
         self._update_origin(estimate)
-        last = None
+        last, started = None, False
         if self.active is not None:
             step, goal = self.active, self.goal.index if self.goal is not None else None
             ended = (self.start_time, now, status, reason, step.explore, goal)
             self.results.append(StepResult(self.index, step.kind, step.delta, *ended))
             self._hold_tilts(step, status, estimate)
             last = status
-        step = self._next(now, estimate, last, float(hand_pose[2]))
+            coordinates = self.coordinates(estimate, hand_pose)
+            started = coordinates is not None and self._started(coordinates)
+        step = self._next(now, estimate, last, float(hand_pose[2]), started)
         if step is None:
             return None
         self.active = step
@@ -442,14 +444,17 @@ class _StepTracker:
             return
         self.s_g_origin, self._origin_anchor = latest, estimate.ground_anchor
 
-    def _next(self, now: float, estimate: Estimate, last: str | None, hand_angle: float) -> Step | None:
+    def _next(
+        self, now: float, estimate: Estimate, last: str | None, hand_angle: float, started: bool
+    ) -> Step | None:
         """The next motion: the goal under way's, else the schedule's next step (a goal's first
         motion; an exploration's probe as :func:`~ccopt.schedule.probe_as_run` has it at the
         ``hand_angle`` (rad), recorded ``skipped`` where it does not run); None at the end of the
-        schedule."""
+        schedule. ``last`` is how the motion under way ended, ``started`` whether it had started
+        (:meth:`_started`)."""
         if self.goal is not None:
             answer = self.goal.next(
-                now, estimate, self.s_g_origin, last, self.roll_tilt, self.held_tilts, hand_angle
+                now, estimate, self.s_g_origin, last, self.roll_tilt, self.held_tilts, hand_angle, started
             )
             if isinstance(answer, Step):
                 return answer

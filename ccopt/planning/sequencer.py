@@ -46,8 +46,8 @@ such failures that way not at all, for the rest of the goal (:attr:`GoalSequence
 A goal the estimate then leaves no way to is ``unreachable``, its reason naming the failed slides.
 A hand slide that slid the ground instead is not one of them: the object moved, and sought at other
 tilts the next slides slid it further (on the goals study they tipped a quadrilateral over).
-A ground slide that did not start (it ended ``rolled`` or ``timeout`` without moving ``ŝ_g`` its way
-by :data:`SLIDE_GAIN`) is tried once more where it failed, then sought half a pivot step further
+A ground slide that did not start (it ended ``rolled`` or ``timeout`` before ``ŝ_g`` moved its way by
+the controller's slide onset) is tried once more where it failed, then sought half a pivot step further
 that way; one ``lost`` near the vertical once the hand has slid, where the pose cannot tell it from
 a hand slide, past that band (:meth:`GoalSequencer._failed_slide`).
 
@@ -88,10 +88,6 @@ DOUBTED = (
 )
 """Why a goal on ``s_h`` or ``s_g`` whose estimate is within its tolerance is not claimed
 (:attr:`~ccopt.estimation.estimator.Estimate.kinematics_doubted`; see the module docstring)."""
-SLIDE_GAIN = 1.5e-3
-"""m: a ground slide that ended held (:data:`HELD`) but moved ``ŝ_g`` its way by at least this
-started all the same (:meth:`GoalSequencer._gained`); the estimate's noise in ``ŝ_g`` over a slide is
-a few tenths of a millimetre."""
 HELD = ("rolled", "timeout")
 """How a slide ends when it did not start: the hand held against it (a hand slide) or the ground
 did (a ground slide), and the object stayed put."""
@@ -200,7 +196,7 @@ class GoalSequencer:
         self._exploration: list[Step] | None = None
         self._explored_last: Step | None = None  # the exploration's last step (run or skipped)
         self.explorations = 0
-        self._last: tuple[Step, float, float] | None = None  # the last motion, its start's θ̂_o and ŝ_g
+        self._last: tuple[Step, float] | None = None  # the last motion and the tilt it began at
         self._hand_tilt = 0.0  # θ_h − θ̂_o (rad) when the next motion was asked for
 
     def next(
@@ -212,13 +208,16 @@ class GoalSequencer:
         roll_tilt: float | None = None,
         held_tilts: tuple[float, float] | None = None,
         hand_angle: float | None = None,
+        last_started: bool = False,
     ) -> Step | GoalResult:
         """The next motion, or how the goal ended; ``last_status`` is how the previous motion of this
         goal ended (None at the start), ``roll_tilt`` the estimated ``θ_o`` (rad) where a pivot that
         ended ``rolled`` was first seen rolling (None: unknown), ``held_tilts`` the range of
         estimated ``θ_o`` (rad) at which pivots left the object on the vertex it is on now (None:
         unknown; :meth:`_rolled`), ``hand_angle`` the measured ``θ_h`` (rad; None: taken as
-        ``θ̂_o``).
+        ``θ̂_o``), ``last_started`` whether the previous motion, a slide, had moved its coordinate
+        its way by the controller's slide onset when it ended
+        (:attr:`~ccopt.control.controller.ControllerParams.slide_onset`).
 
         A pivot turns the hand from ``θ_h``, and the robot's reach bounds where the hand ends, not
         the face: the hand stands tilted against the face by the pad's compliance under the torque
@@ -228,11 +227,10 @@ class GoalSequencer:
         failed)."""
         hand_tilt = hand_angle - float(estimate.theta_o) if hand_angle is not None else 0.0
         self._hand_tilt = hand_tilt if math.isfinite(hand_tilt) else 0.0
-        if self._gained(estimate, last_status):
-            last_status = "reached"
-        self.misses = 0 if last_status in (None, "reached") else self.misses + 1
-        if self._last is not None and last_status not in (None, "reached"):
-            step, tilt, _ = self._last
+        failed = last_status not in (None, "reached") and not self._started(last_status, last_started)
+        self.misses = self.misses + 1 if failed else 0
+        if self._last is not None and failed:
+            step, tilt = self._last
             way = 1 if step.delta > 0 else -1
             if step.kind == "slide_ground":
                 self._failed_slide(tilt, way, last_status, estimate)
@@ -268,7 +266,7 @@ class GoalSequencer:
             plan = back
         if plan.status == "unreachable":
             return self.end(now, "unreachable", plan.reason + self._failures())
-        self._last = (plan.motion, float(estimate.theta_o), float(estimate.s_g))
+        self._last = (plan.motion, float(estimate.theta_o))
         probe = plan.explores or seeks_friction(estimate, plan.motion.motion)
         return self._take(dataclasses.replace(plan.motion, explore=True) if probe else plan.motion)
 
@@ -410,24 +408,20 @@ class GoalSequencer:
             return True
         return self._near(tilts, theta) >= self.slide_tries_per_tilt
 
-    def _gained(self, estimate: Estimate, status: str | None) -> bool:
-        """Whether the last motion, a ground slide that ended held, moved ``ŝ_g`` its way by at
-        least :data:`SLIDE_GAIN` all the same: it started, and counts neither as a failed slide
-        (:meth:`_failed_slide`) nor as a miss. A slide ends ``rolled`` on the conservative report
-        (the hand's torque near its limit over the part of the face known), and at the end of the
-        reach there may be no other tilt to seek it at: on the Panda plant a quadrilateral's
-        slides towards +s_g at 29.8° ended ``rolled`` after sliding the ground 1.7 and 3.6 mm, and
-        the goal was reported unreachable; with them counted as started, the next slide there slid
-        9.8 mm and the goal was reached (:mod:`tests.test_goal_recovery`). Goals study on the
-        Panda, seeds 0–7: 555/649 → 558/649 oracle-reachable goals reached, claimed outside
-        tolerance 20 → 20; on the planar plant, seeds 0–19: 1 822/2 035 → 1 820/2 033, 74 → 75
-        (within the noise); paper cases, paper study (8 of 10) and robustness study (32 and 26 of
-        50) unchanged."""
-        if self._last is None or status not in HELD or self._last[0].kind != "slide_ground":
-            return False
-        step, _, begin = self._last
-        moved = (float(estimate.s_g) - begin) * (1 if step.delta > 0 else -1)
-        return _usable(estimate) and moved >= SLIDE_GAIN
+    def _started(self, status: str | None, started: bool) -> bool:
+        """Whether the last motion, a ground slide that ended held (``status`` in :data:`HELD`), had
+        ``started`` all the same: moved ``ŝ_g`` its way by the controller's slide onset. It is then
+        neither a failed slide (:meth:`_failed_slide`) nor a miss. A slide ends ``rolled`` on the
+        conservative report (the hand's torque near its limit over the part of the face known), and
+        at the end of the reach there may be no other tilt to seek it at: on the Panda plant a
+        quadrilateral's slides towards +s_g at 29.8° ended ``rolled`` after sliding the ground 1.7
+        and 3.6 mm, and the goal was reported unreachable; counted as started, the next slide there
+        slid 9.8 mm and the goal was reached (:mod:`tests.test_goal_recovery`). Goals study on the
+        Panda, seeds 0–7: 555/649 → 559/649 oracle-reachable goals reached, claimed outside
+        tolerance 20 → 21 (a 2.3 mm near miss); on the planar plant, seeds 0–19: 1 822/2 035 →
+        1 820/2 033, claimed 74 → 75 (within the noise); paper cases, paper study (8 of 10) and
+        robustness study (32 and 26 of 50) unchanged."""
+        return started and status in HELD and self._last is not None and self._last[0].kind == "slide_ground"
 
     def _near(self, tilts: list[float] | tuple[float, ...], theta: float) -> int:
         """How many of ``tilts`` (rad) lie within half a pivot step of ``theta`` (rad)."""
