@@ -28,7 +28,12 @@ answers, every time a motion ends, with the next motion or with how the goal end
   only after 5° of turning. ``θ_o`` is the hand's, and a goal on it alone stands. Over seeds 0–19
   of the goals study it changed six goals of 2 500 (a run goes on the same either way): four
   claimed 18–50 mm off by the truth, and two within their tolerance that the oracle does not
-  reach;
+  reach. And where the estimator reports the hand off flush (on the face's end:
+  ``θ̂_o`` is then not the hand's angle, and the positions taken from it are off), the goal first
+  holds for :data:`SETTLE_TIME` (once, :attr:`GoalSequencer.max_settles`) and is judged again on
+  the estimate the hold leaves: on the goals study a hand slide at 39° rolled an object 12° past the
+  hand, which the kinematics still took as flush, and the next ``s_g`` goal was claimed at once 14 mm
+  off by the truth; after the hold the estimate saw where the object lay;
 * ``unreachable`` — no sequence reaches it under the estimate, with the planner's reason;
 * ``timeout`` — the goal's time ran out;
 * ``failed`` — the estimate became unusable, or :attr:`GoalSequencer.max_misses` planned motions
@@ -67,7 +72,7 @@ import numpy as np
 
 from ccopt.control.targets import TargetGoal, estimated_statics, seeks_friction
 from ccopt.estimation.estimator import Estimate
-from ccopt.modes import Motion, configuration, kind_of
+from ccopt.modes import HandGeometry, Motion, configuration, kind_of
 from ccopt.planning.graph import Statics
 from ccopt.planning.planner import (
     Plan,
@@ -78,7 +83,7 @@ from ccopt.planning.planner import (
     past_reach,
     towards,
 )
-from ccopt.schedule import DEFAULT_TOLERANCE, Goal, Step, exploration, probe_as_run
+from ccopt.schedule import DEFAULT_TOLERANCE, Goal, Step, exploration, hold, probe_as_run
 from ccopt.statics import ObjectStatics
 
 GOAL_STATUSES = ("reached", "unreachable", "timeout", "failed")
@@ -88,6 +93,9 @@ DOUBTED = (
 )
 """Why a goal on ``s_h`` or ``s_g`` whose estimate is within its tolerance is not claimed
 (:attr:`~ccopt.estimation.estimator.Estimate.kinematics_doubted`; see the module docstring)."""
+SETTLE_TIME = 0.3
+"""How long (s) a goal whose estimate is within its tolerance holds before it is claimed where the
+hand is reported off flush (on a face's end, ``θ̂_o`` not the hand's)."""
 HELD = ("rolled", "timeout")
 """How a slide ends when it did not start: the hand held against it (a hand slide) or the ground
 did (a ground slide), and the object stayed put."""
@@ -157,6 +165,7 @@ class GoalSequencer:
     max_hand_slide_failures = 3
     lost_slide_tries = 2
     slide_tries_per_tilt = 2
+    max_settles = 1
 
     def __init__(
         self,
@@ -196,6 +205,8 @@ class GoalSequencer:
         self._exploration: list[Step] | None = None
         self._explored_last: Step | None = None  # the exploration's last step (run or skipped)
         self.explorations = 0
+        self.settles = 0
+        """Holds taken before a claim where the hand was reported off flush (module docstring)."""
         self._last: tuple[Step, float] | None = None  # the last motion and the tilt it began at
         self._hand_tilt = 0.0  # θ_h − θ̂_o (rad) when the next motion was asked for
 
@@ -260,6 +271,9 @@ class GoalSequencer:
         if plan.status == "reached":
             if estimate.kinematics_doubted and any(target is not None for target in self.goal.targets[1:]):
                 return self.end(now, "failed", DOUBTED)
+            if estimate.hand_geometry != HandGeometry.FLUSH and self.settles < self.max_settles:
+                self.settles += 1
+                return self._take(hold(SETTLE_TIME))
             return self.end(now, "reached")
         back = back_within(float(estimate.theta_o), self._reach(), self.params)
         if back is not None:
