@@ -28,12 +28,13 @@ answers, every time a motion ends, with the next motion or with how the goal end
   only after 5° of turning. ``θ_o`` is the hand's, and a goal on it alone stands. Over seeds 0–19
   of the goals study it changed six goals of 2 500 (a run goes on the same either way): four
   claimed 18–50 mm off by the truth, and two within their tolerance that the oracle does not
-  reach. And where the estimator reports the hand off flush (on the face's end:
-  ``θ̂_o`` is then not the hand's angle, and the positions taken from it are off), the goal first
-  holds for :data:`SETTLE_TIME` (once, :attr:`GoalSequencer.max_settles`) and is judged again on
-  the estimate the hold leaves: on the goals study a hand slide at 39° rolled an object 12° past the
-  hand, which the kinematics still took as flush, and the next ``s_g`` goal was claimed at once 14 mm
-  off by the truth; after the hold the estimate saw where the object lay;
+  reach. Where the estimator reports the hand off flush (on the face's end, so ``θ̂_o`` is not the
+  face's angle and the positions taken from it are off), the goal first holds for
+  :data:`SETTLE_TIME` (once, :attr:`GoalSequencer.max_settles`) and is judged again on the
+  estimate the hold leaves: on the goals study a hand slide at 39° rolled an object 12° past the
+  hand, which the kinematics still took as flush (they follow the commanded configuration), and
+  the next ``s_g`` goal was claimed at once 14 mm off by the truth; after the hold the estimate saw
+  where the object lay;
 * ``unreachable`` — no sequence reaches it under the estimate, with the planner's reason;
 * ``timeout`` — the goal's time ran out;
 * ``failed`` — the estimate became unusable, or :attr:`GoalSequencer.max_misses` planned motions
