@@ -112,7 +112,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ccopt import geometry
 from ccopt.estimation.quantile import check_count, check_number
 from ccopt.estimation.records import record
 from ccopt.modes import ContactConfiguration, ContactMode, HandGeometry
@@ -390,8 +389,6 @@ class KinematicEstimator:
             self._flush_angle(pose[2], torque)
         else:
             self.reset()
-            if flush:
-                self._flush_angle(pose[2], torque)
         if following and hand_sticks and hand_may_slide and abs(pose[2]) < self._split_tilt:
             self._follow_doubt = True
         if not following and not (ground_may_slide and self._start_height_known()):
@@ -702,20 +699,22 @@ def pivot_contact(
     method from ``theta_start`` (``d e_n/dθ = e_t``). ``s_h`` is the flush-hand equivalent:
     ``(r_o − p)·e_t(θ_o) + sign·l_h``. None if Newton does not converge.
     """
-    p = hand_pose[:2] + sign * half_length * geometry.hand_tangent(float(hand_pose[2]))
-    arm = r_o - p
+    x_h, y_h, theta_h = hand_pose.tolist()
+    lever = sign * half_length
+    x_o, y_o = (float(value) for value in r_o)
+    arm_x, arm_y = x_o - (x_h + lever * math.cos(theta_h)), y_o - (y_h + lever * math.sin(theta_h))
     theta = theta_start
     for _ in range(_PIVOT_ITERATIONS):
-        residual = float(arm @ geometry.hand_normal(theta)) - d
-        slope = float(arm @ geometry.hand_tangent(theta))
+        residual = (arm_x * math.sin(theta) + arm_y * -math.cos(theta)) - d  # arm · e_n(θ) − d
+        slope = arm_x * math.cos(theta) + arm_y * math.sin(theta)  # arm · e_t(θ)
         if slope == 0.0:
             return None
         theta -= residual / slope
         if abs(residual) < 1e-12:
             break
     if (
-        not abs(float(arm @ geometry.hand_normal(theta)) - d) < 1e-9
-        or abs(theta - hand_pose[2]) > 0.5 * math.pi
+        not abs((arm_x * math.sin(theta) + arm_y * -math.cos(theta)) - d) < 1e-9
+        or abs(theta - theta_h) > 0.5 * math.pi
     ):
         return None
-    return theta, float(arm @ geometry.hand_tangent(theta)) + sign * half_length
+    return theta, (arm_x * math.cos(theta) + arm_y * math.sin(theta)) + lever
