@@ -586,9 +586,21 @@ class KinematicEstimator:
     def _predict(self, row: _Row, value: float) -> _Prediction:
         """``(P hᵀ, innovation, innovation variance)`` of one measurement ``row · x = value``."""
         h0, h1, h2, h3, h4, h5 = row
-        c0, c1, c2, c3, c4, c5 = [  # P hᵀ, each row unpacked once (an index a term costs more)
-            p0 * h0 + p1 * h1 + p2 * h2 + p3 * h3 + p4 * h4 + p5 * h5 for p0, p1, p2, p3, p4, p5 in self._cov
-        ]
+        # P hᵀ written out, each row unpacked once: every sample runs it, and a comprehension (its own
+        # frame and a list) costs 0.74 µs a call against 0.44 (an index a term costs more still)
+        r0, r1, r2, r3, r4, r5 = self._cov
+        p0, p1, p2, p3, p4, p5 = r0
+        c0 = p0 * h0 + p1 * h1 + p2 * h2 + p3 * h3 + p4 * h4 + p5 * h5
+        p0, p1, p2, p3, p4, p5 = r1
+        c1 = p0 * h0 + p1 * h1 + p2 * h2 + p3 * h3 + p4 * h4 + p5 * h5
+        p0, p1, p2, p3, p4, p5 = r2
+        c2 = p0 * h0 + p1 * h1 + p2 * h2 + p3 * h3 + p4 * h4 + p5 * h5
+        p0, p1, p2, p3, p4, p5 = r3
+        c3 = p0 * h0 + p1 * h1 + p2 * h2 + p3 * h3 + p4 * h4 + p5 * h5
+        p0, p1, p2, p3, p4, p5 = r4
+        c4 = p0 * h0 + p1 * h1 + p2 * h2 + p3 * h3 + p4 * h4 + p5 * h5
+        p0, p1, p2, p3, p4, p5 = r5
+        c5 = p0 * h0 + p1 * h1 + p2 * h2 + p3 * h3 + p4 * h4 + p5 * h5
         variance = c0 * h0 + c1 * h1 + c2 * h2 + c3 * h3 + c4 * h4 + c5 * h5 + self._noise_variance
         s0, s1, s2, s3, s4, s5 = self._state
         innovation = value - (s0 * h0 + s1 * h1 + s2 * h2 + s3 * h3 + s4 * h4 + s5 * h5)
