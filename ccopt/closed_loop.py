@@ -179,6 +179,9 @@ class RunResult:
     goals: tuple[GoalResult, ...] = ()
     hand_angle_range: tuple[float, float] = (-math.pi, math.pi)
     """The hand angles the plant's robot reaches (rad)."""
+    target_at_reach: float = 0.0
+    """Simulated time (s) the impedance target's turn was held at the end of the robot's reach
+    (:attr:`~ccopt.plant.base.Plant.target_angle_range`)."""
     force_headroom: float | None = None
     """How far below the hand's largest force (N) the run's controller and planner kept the normal
     force (:func:`plant_controls`; None: the controller parameters' own)."""
@@ -818,6 +821,9 @@ class _Loop:
         )
         self.target = np.array(self.plant.target(), dtype=float)
         self.velocity = np.zeros(3)
+        self.target_angles = tuple(self.plant.target_angle_range)
+        self.target_held = 0
+        """Plant steps whose target the robot's reach held (:meth:`_advance_plant`)."""
         self.timestep = self.plant.timestep
         self.now = self.plant.time
         """The plant's time after its last step, s."""
@@ -882,7 +888,13 @@ class _Loop:
     def _advance_plant(self) -> None:
         plant, dt = self.plant, self.timestep
         (x, y, theta), (v_x, v_y, v_theta) = self.target.tolist(), self.velocity.tolist()
-        self.target[:] = (x + v_x * dt, y + v_y * dt, theta + v_theta * dt)  # the ramp, in floats
+        theta += v_theta * dt
+        low, high = self.target_angles
+        if not low <= theta <= high:  # the robot's reach holds the target's turn at its end
+            theta = low if theta < low else high
+            self.velocity[2] = 0.0
+            self.target_held += 1
+        self.target[:] = (x + v_x * dt, y + v_y * dt, theta)  # the ramp, in floats
         plant.set_target(self.target, self.velocity, check=False)  # finite (Controller.update's steps are)
         while self.pending and plant.time >= self.pending[0].time:
             push = self.pending.pop(0)
@@ -1043,6 +1055,7 @@ class _Loop:
             folder=self.folder,
             goals=tuple(tracker.goal_results),
             hand_angle_range=tuple(self.plant.hand_angle_range),
+            target_at_reach=self.target_held * self.timestep,
             force_headroom=self.goal.headroom,
             last_usable=self.last_usable,
         )

@@ -248,6 +248,7 @@ def run_experiment(
     summary["message"] = result.message
     summary["units"] = SUMMARY_UNITS
     summary["impossible_steps"] = statics.impossible_steps(checks)
+    summary["target_at_reach_s"] = result.target_at_reach
     summary["kinematics_resets"] = metrics.kinematics_resets(data["est_kinematics_valid"]) if data else 0
     maps = None
     if folder is not None:

@@ -8,6 +8,7 @@ import pytest
 
 from ccopt import closed_loop, metrics, record
 from ccopt.objects import PAPER_ADDED_MASS, make_object
+from ccopt.plant.mujoco_planar import PlanarPlant
 from ccopt.plant.sensors import SensorParams, parse_fault
 from ccopt.schedule import Goal, load_schedule
 
@@ -212,3 +213,24 @@ def test_a_solver_failing_briefly_holds_and_the_run_completes(monkeypatch):
     assert result.status == "completed"
     time = result.samples["time"]
     assert not result.samples["qp_feasible"][(time > 0.84) & (time < 0.9)].all()
+
+
+def test_the_target_turns_no_further_than_the_robot_reaches(monkeypatch, smoke_run):
+    """The impedance target's angle stays within the plant's ``target_angle_range``: with the reach
+    cut to 3° above the start, the smoke schedule's first pivot (+7.2°, within the hand's range, so
+    not refused) turns the target to that end and holds it there, the hand runs on past it by no more
+    than its lag (0.2° here; the Panda's target range leaves its joints 0.03 rad, 1.7°, inside their
+    limits), and the run reports the time held. The same run with the plant's own range turns the target past
+    that end, so the check can fail."""
+    end = 0.3 + math.radians(3.0)  # the start's θ_o (flush hand) and 3°
+    free, _ = smoke_run
+    assert free.target_at_reach == 0.0
+    assert np.asarray(free.samples["target"])[:, 2].max() > end + math.radians(3.0)
+    monkeypatch.setattr(PlanarPlant, "target_angle_range", property(lambda self: (-math.pi / 2, end)))
+    result = closed_loop.run(make_object("paper-triangle"), load_schedule("smoke"), seed=3)
+    target = np.asarray(result.samples["target"])[:, 2]
+    hand = np.asarray(result.samples["true_hand_pose"])[:, 2]
+    assert target.max() <= end and np.isclose(target.max(), end, rtol=0.0, atol=1e-12)
+    assert hand.max() <= end + math.radians(0.5)
+    assert result.target_at_reach > 0.1
+    assert result.steps[1].status == "timeout"

@@ -12,9 +12,9 @@ from ccopt import geometry
 from ccopt.hand import Hand
 from ccopt.objects import make_object
 from ccopt.plant.base import Plant, StartConfig
-from ccopt.plant.mujoco_panda import HAND_BODY, HAND_SITE, PandaParams, PandaPlant
+from ccopt.plant.mujoco_panda import HAND_BODY, HAND_SITE, TARGET_JOINT_MARGIN, PandaParams, PandaPlant
 from panda_model.impedance import joint_stiffness, planar_stiffness
-from panda_model.model import hand_jacobian, hand_placement, task_jacobian
+from panda_model.model import hand_jacobian, hand_placement, inverse_kinematics, task_jacobian
 
 SQUARE = make_object("square")
 
@@ -173,3 +173,21 @@ def test_bad_commands_raise_clear_value_errors():
         plant.push_object((1.0, 2.0), -0.1)
     with pytest.raises(ValueError, match="n_steps"):
         plant.step(-1)
+
+
+def test_the_target_range_holds_the_hand_range_and_room_beyond_it_inside_the_joints():
+    """``target_angle_range`` contains ``hand_angle_range`` and its upper end is 2.5–5° beyond it (the
+    paper triangle's ground slide at the hand range's end took the target 1.7° past it). Judged by
+    MuJoCo's own joint ranges: the arm holds the hand at that end with every joint at least
+    ``TARGET_JOINT_MARGIN`` inside them, and 0.2° further it cannot."""
+    plant = PandaPlant(make_object("paper-triangle"))
+    (low, high), (target_low, target_high) = plant.hand_angle_range, plant.target_angle_range
+    assert target_low <= low and math.radians(2.5) <= target_high - high <= math.radians(5.0)
+    model = plant.model
+    joints = [model.joint(f"panda_joint{i}") for i in range(1, 8)]
+    lower, upper = (np.array([j.range[k] for j in joints]) for k in (0, 1))
+    x, y, _ = plant.start_hand_pose
+    q = inverse_kinematics(plant.panda, [x, y, target_high], plant._posture)
+    assert np.all(q >= lower + TARGET_JOINT_MARGIN) and np.all(q <= upper - TARGET_JOINT_MARGIN)
+    beyond = inverse_kinematics(plant.panda, [x, y, target_high + math.radians(0.2)], q)
+    assert np.any(beyond < lower + TARGET_JOINT_MARGIN) or np.any(beyond > upper - TARGET_JOINT_MARGIN)

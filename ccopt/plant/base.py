@@ -142,7 +142,12 @@ class Plant(Protocol):
     params: PlantParams
     hand: Hand
     hand_angle_range: tuple[float, float]
-    """The hand angles ``θ_h`` (rad) the robot reaches; a target outside is refused."""
+    """The hand angles ``θ_h`` (rad) the robot reaches; a motion planned or scripted to end outside
+    is refused."""
+    target_angle_range: tuple[float, float]
+    """The impedance target's angles (rad) the robot may be driven to: :attr:`hand_angle_range` and
+    the room a motion at its end needs (the regulation's torque turns the target on, and a slide
+    may turn the object on); the loop holds the target within it."""
     force_model_error: float
     """N: how far the hand force may differ from the impedance model ``K e + D ė`` (filtered, for as
     long as a sensor fault must last, :mod:`ccopt.health`) in fault-free runs of this plant: its

@@ -57,6 +57,11 @@ JOINT_MARGIN = 0.1
 """rad: how far inside its limits every joint must stay for a hand angle to count as reachable."""
 ANGLE_PROBE = math.radians(2.5)
 """rad: the step in which :attr:`PandaPlant.hand_angle_range` probes the reachable hand angles."""
+TARGET_JOINT_MARGIN = 0.03
+"""rad: how far inside its limits every joint must stay for a hand angle to count as a target the
+arm may be driven to (:attr:`PandaPlant.target_angle_range`)."""
+TARGET_ANGLE_RESOLUTION = math.radians(0.1)
+"""rad: how finely :attr:`PandaPlant.target_angle_range` finds the end of the reach."""
 
 HAND_BODY = "hand_plate"
 HAND_SITE = "hand_face"
@@ -317,20 +322,43 @@ class PandaPlant(MujocoPlant):
         """Hand angles ``θ_h`` (rad) the arm reaches at the start position with every joint
         :data:`JOINT_MARGIN` inside its limits, found by inverse kinematics from the start outwards in
         :data:`ANGLE_PROBE` steps (a target outside is refused by the loop before the arm gets there)."""
+        return self._reach(JOINT_MARGIN, ANGLE_PROBE)
+
+    @functools.cached_property
+    def target_angle_range(self) -> tuple[float, float]:
+        """Impedance-target angles (rad) the loop may drive the arm to: the hand angles reached at the
+        start position with every joint :data:`TARGET_JOINT_MARGIN` inside its limits, found to
+        :data:`TARGET_ANGLE_RESOLUTION`. The hand ends past :attr:`hand_angle_range` by up to a couple
+        of degrees where a motion at its end turns the object on (the paper triangle's ground slide at
+        29.7° took the hand to 31.1° and its target to 31.4°); this range, 2.5–5° wider, bounds them."""
+        return self._reach(TARGET_JOINT_MARGIN, TARGET_ANGLE_RESOLUTION)
+
+    def _reach(self, margin: float, resolution: float) -> tuple[float, float]:
+        """The ends of the hand angles (rad) reached at the start position with every joint ``margin``
+        (rad) inside its limits: inverse kinematics from the start outwards in :data:`ANGLE_PROBE`
+        steps, the step halved where it fails until the end is found to ``resolution``."""
         start = self.start_hand_pose
-        lower = self.panda.model.lowerPositionLimit + JOINT_MARGIN
-        upper = self.panda.model.upperPositionLimit - JOINT_MARGIN
+        lower = self.panda.model.lowerPositionLimit + margin
+        upper = self.panda.model.upperPositionLimit - margin
+
+        def solve(angle: float, seed: np.ndarray) -> np.ndarray | None:
+            try:
+                q = inverse_kinematics(self.panda, [start[0], start[1], angle], seed)
+            except ValueError:
+                return None
+            return None if np.any(q < lower) or np.any(q > upper) else q
+
         ends = []
         for sign in (-1.0, 1.0):
-            seed, angle = self._posture.copy(), float(start[2])
+            seed, angle, step = self._posture.copy(), float(start[2]), ANGLE_PROBE
             while abs(angle - start[2]) < math.pi / 2:
-                try:
-                    q = inverse_kinematics(self.panda, [start[0], start[1], angle + sign * ANGLE_PROBE], seed)
-                except ValueError:
+                q = solve(angle + sign * step, seed)
+                if q is not None:
+                    seed, angle = q, angle + sign * step
+                elif step <= resolution:
                     break
-                if np.any(q < lower) or np.any(q > upper):
-                    break
-                seed, angle = q, angle + sign * ANGLE_PROBE
+                else:
+                    step = step / 2
             ends.append(angle)
         return ends[0], ends[1]
 

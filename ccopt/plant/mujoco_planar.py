@@ -29,6 +29,9 @@ HAND_JOINTS = ("hand_x", "hand_z", "hand_theta")
 HAND_ANGLE_RANGE = (-math.radians(75.0), math.radians(75.0))
 """rad: the hand angles the planar hand may take (its joints have no limits; beyond, the hand lies too
 close to the ground to press)."""
+TARGET_ANGLE_RANGE = (-math.radians(80.0), math.radians(80.0))
+"""rad: the impedance target's angles the planar hand may be driven to: :data:`HAND_ANGLE_RANGE` and
+5° of room, as the Panda's (2.5–5°: :attr:`~ccopt.plant.mujoco_panda.PandaPlant.target_angle_range`)."""
 
 
 def hand_body_xml(hand: Hand, params: PlantParams) -> str:
@@ -133,6 +136,11 @@ class PlanarPlant(MujocoPlant):
     def hand_angle_range(self) -> tuple[float, float]:
         """The hand angles ``θ_h`` (rad) this plant may take (:data:`HAND_ANGLE_RANGE`)."""
         return HAND_ANGLE_RANGE
+
+    @property
+    def target_angle_range(self) -> tuple[float, float]:
+        """The impedance target's angles (rad) this plant may be driven to (:data:`TARGET_ANGLE_RANGE`)."""
+        return TARGET_ANGLE_RANGE
 
     def _settle(self, target: np.ndarray) -> None:
         """Press towards ``target`` for the settle time, the object held for its first quarter;
