@@ -321,7 +321,8 @@ class PandaPlant(MujocoPlant):
     def hand_angle_range(self) -> tuple[float, float]:
         """Hand angles ``θ_h`` (rad) the arm reaches at the start position with every joint
         :data:`JOINT_MARGIN` inside its limits, found by inverse kinematics from the start outwards in
-        :data:`ANGLE_PROBE` steps (a target outside is refused by the loop before the arm gets there)."""
+        :data:`ANGLE_PROBE` steps: the loop refuses a motion planned or scripted to end outside it (the
+        impedance target itself is held within :attr:`target_angle_range`)."""
         return self._reach(JOINT_MARGIN, ANGLE_PROBE)
 
     @functools.cached_property
@@ -330,7 +331,8 @@ class PandaPlant(MujocoPlant):
         start position with every joint :data:`TARGET_JOINT_MARGIN` inside its limits, found to
         :data:`TARGET_ANGLE_RESOLUTION`. The hand ends past :attr:`hand_angle_range` by up to a couple
         of degrees where a motion at its end turns the object on (the paper triangle's ground slide at
-        29.7° took the hand to 31.1° and its target to 31.4°); this range, 2.5–5° wider, bounds them."""
+        29.7° took the hand to 31.1° and its target to 31.4°); this range, 3.5–4.6° wider at the paper
+        objects' starts, bounds them."""
         return self._reach(TARGET_JOINT_MARGIN, TARGET_ANGLE_RESOLUTION)
 
     def _reach(self, margin: float, resolution: float) -> tuple[float, float]:

@@ -31,7 +31,8 @@ HAND_ANGLE_RANGE = (-math.radians(75.0), math.radians(75.0))
 close to the ground to press)."""
 TARGET_ANGLE_RANGE = (-math.radians(80.0), math.radians(80.0))
 """rad: the impedance target's angles the planar hand may be driven to: :data:`HAND_ANGLE_RANGE` and
-5° of room, as the Panda's (2.5–5°: :attr:`~ccopt.plant.mujoco_panda.PandaPlant.target_angle_range`)."""
+5° of room, about the Panda's (3.5–4.6° at the paper objects' starts:
+:attr:`~ccopt.plant.mujoco_panda.PandaPlant.target_angle_range`)."""
 
 
 def hand_body_xml(hand: Hand, params: PlantParams) -> str:
